@@ -1,0 +1,85 @@
+//! Errors of the library. Every variant carries the values a user needs to
+//! find the problem: the file and key for input, the step and time or lambda
+//! (and node, where there is one) for numerical trouble.
+
+use std::path::PathBuf;
+
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    #[error("{file}: cannot read: {source}")]
+    Io {
+        file: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error("{file}: {message}")]
+    Parse { file: PathBuf, message: String },
+    #[error("{file}: key `{key}`: {problem}")]
+    Invalid {
+        file: PathBuf,
+        key: String,
+        problem: String,
+    },
+    #[error("{file}:{line}: {problem}")]
+    Mesh {
+        file: PathBuf,
+        line: usize,
+        problem: String,
+    },
+    #[error("element {element}: {problem}")]
+    Element { element: usize, problem: String },
+    #[error("step {step}, {param} = {at:.9e}: singular tangent matrix ({detail})")]
+    SingularMatrix {
+        step: usize,
+        param: &'static str,
+        at: f64,
+        detail: String,
+    },
+    #[error(
+        "step {step}, {param} = {at:.9e}: no convergence after {iterations} iterations (residual {residual:.3e}, tolerance {tolerance:.1e})"
+    )]
+    NoConvergence {
+        step: usize,
+        param: &'static str,
+        at: f64,
+        iterations: usize,
+        residual: f64,
+        tolerance: f64,
+    },
+    #[error("step {step}, {param} = {at:.9e}: non-finite value in {what}")]
+    NonFinite {
+        step: usize,
+        param: &'static str,
+        at: f64,
+        what: String,
+    },
+    #[error("step {step}, {param} = {at:.9e}: step length collapsed to {length:.3e}")]
+    StepCollapse {
+        step: usize,
+        param: &'static str,
+        at: f64,
+        length: f64,
+    },
+    #[error("{0}")]
+    Output(String),
+}
+
+impl Error {
+    /// Short machine-readable kind, used as `stop.reason` in summary.json.
+    pub fn kind(&self) -> &'static str {
+        match self {
+            Error::Io { .. } => "io",
+            Error::Parse { .. } => "parse",
+            Error::Invalid { .. } => "invalid_input",
+            Error::Mesh { .. } => "mesh",
+            Error::Element { .. } => "element",
+            Error::SingularMatrix { .. } => "singular_matrix",
+            Error::NoConvergence { .. } => "no_convergence",
+            Error::NonFinite { .. } => "non_finite",
+            Error::StepCollapse { .. } => "step_collapse",
+            Error::Output(_) => "output",
+        }
+    }
+}
+
+pub type Result<T> = std::result::Result<T, Error>;

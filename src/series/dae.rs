@@ -1,0 +1,401 @@
+//! Taylor series in time for semi-explicit index-1 DAEs (DESIGN §2; paper
+//! §3.2, eqs. 8–9).
+//!
+//! F(u, v, z, t) = 0 with v = du/dt: u are the differential unknowns, z the
+//! algebraic ones, and dF/d(v, z) must be invertible (index 1). With a = t - t0,
+//! u = sum u_p a^p, v = sum v_p a^p, z = sum z_p a^p and eq. (9)
+//! v_p = (p + 1) u_{p+1}, order p proceeds as:
+//!   u_p = v_{p-1} / p (known),   J (v_p, z_p) = -F_p|_{v_p = z_p = 0},
+//! with J = dF/d(v, z) factorized once at the step start. The right-hand side is
+//! propagated incrementally on a [`Tape`]; because F_p is affine in (v_p, z_p)
+//! with matrix J, the solve is exact, and the defect F_p after it is checked.
+
+use super::stats::{Stats, charge};
+use super::tape::{Tape, TapeBuilder, Var};
+use super::taylor;
+use crate::error::{Error, Result};
+use crate::linalg::norm;
+use nalgebra::{DMatrix, DVector};
+use std::time::Instant;
+
+/// A semi-explicit index-1 DAE written once with tape arithmetic.
+pub trait DaeProblem {
+    /// Number of differential unknowns u (each with its velocity v).
+    fn n_diff(&self) -> usize;
+    /// Number of algebraic unknowns z.
+    fn n_alg(&self) -> usize;
+    /// Records the n_diff + n_alg residuals F(u, v, z, t).
+    fn record<'a>(
+        &self,
+        b: &'a TapeBuilder,
+        u: &[Var<'a>],
+        v: &[Var<'a>],
+        z: &[Var<'a>],
+        t: Var<'a>,
+    ) -> Vec<Var<'a>>;
+    /// Names of u, v and z for outputs and diagnostics.
+    fn names(&self) -> Vec<String>;
+}
+
+/// How the order 0 of the first step is obtained.
+#[derive(Clone, Debug)]
+pub enum Initialization {
+    /// Damped Newton on F(u0, v, z, t0) = 0 for (v, z) from a guess.
+    Newton { v: Vec<f64>, z: Vec<f64> },
+    /// Exact initial values given by the user; only checked.
+    Exact { v: Vec<f64>, z: Vec<f64> },
+}
+
+#[derive(Clone, Debug)]
+pub struct DaeConfig {
+    pub order: usize,
+    pub eps: f64,
+    pub t0: f64,
+    pub t_end: f64,
+    pub max_steps: usize,
+    /// Absolute tolerance of the Newton initialization and corrections,
+    /// relative to the residual scale.
+    pub newton_tol: f64,
+    /// Correct (v, z) by Newton at the step end when |F| exceeds `residual_tol`.
+    pub correct: bool,
+    pub residual_tol: f64,
+    /// A step shorter than this means the solution ceased to be smooth: the
+    /// run stops with reason "singularity".
+    pub min_step: f64,
+}
+
+/// One accepted time step.
+#[derive(Clone, Debug)]
+pub struct TimeStep {
+    pub index: usize,
+    pub t0: f64,
+    pub length: f64,
+    /// Series of the inputs u (n_diff), v (n_diff), z (n_alg), in that order.
+    pub series: Vec<Vec<f64>>,
+    /// |F| at the step end before correction.
+    pub end_residual: f64,
+}
+
+impl TimeStep {
+    /// (u, v, z) at time t in [t0, t0 + length].
+    pub fn eval(&self, t: f64) -> Vec<f64> {
+        self.series
+            .iter()
+            .map(|c| taylor::eval(c, t - self.t0))
+            .collect()
+    }
+}
+
+/// How a DAE run ended.
+#[derive(Debug)]
+pub struct DaeResult {
+    pub stats: Stats,
+    /// "end", "singularity", "max_steps" or an error kind.
+    pub stop: String,
+    /// Time of the stop (for a singularity: where the steps collapsed).
+    pub t: f64,
+    pub error: Option<Error>,
+    /// Initial (v, z) actually used and |F| there.
+    pub initial_residual: f64,
+}
+
+/// The tape of a problem: inputs u, v, z, t in that order.
+pub fn record_tape<P: DaeProblem>(problem: &P, order: usize) -> Tape {
+    let b = TapeBuilder::new();
+    let (nd, na) = (problem.n_diff(), problem.n_alg());
+    let u = b.inputs(nd);
+    let v = b.inputs(nd);
+    let z = b.inputs(na);
+    let t = b.input();
+    let f = problem.record(&b, &u, &v, &z, t);
+    assert_eq!(
+        f.len(),
+        nd + na,
+        "a DAE needs as many equations as v and z unknowns"
+    );
+    b.finish(&f, order)
+}
+
+struct Engine<'p, P: DaeProblem> {
+    problem: &'p P,
+    tape: Tape,
+    nd: usize,
+    na: usize,
+    stats: Stats,
+}
+
+impl<P: DaeProblem> Engine<'_, P> {
+    fn n(&self) -> usize {
+        self.nd + self.na
+    }
+
+    /// Sets the order-0 inputs and propagates; returns F.
+    fn eval0(&mut self, u: &[f64], vz: &[f64], t: f64) -> Vec<f64> {
+        let mut x = u.to_vec();
+        x.extend_from_slice(vz);
+        x.push(t);
+        self.tape.eval(&x)
+    }
+
+    /// J = dF/d(v, z) at the current order-0 point, LU-factorized.
+    fn factorize(
+        &mut self,
+        step: usize,
+        t: f64,
+    ) -> Result<nalgebra::LU<f64, nalgebra::Dyn, nalgebra::Dyn>> {
+        let start = Instant::now();
+        let cols: Vec<usize> = (self.nd..self.nd + self.n()).collect();
+        let rows = self.tape.jacobian(&cols);
+        let n = self.n();
+        let j = DMatrix::from_fn(n, n, |r, c| rows[r][c]);
+        charge(&mut self.stats.assembly_s, start);
+        let start = Instant::now();
+        let lu = j.clone().lu();
+        self.stats.factorizations += 1;
+        charge(&mut self.stats.factorization_s, start);
+        // Reciprocal condition estimate from the LU pivots, to name the trouble.
+        let diag: Vec<f64> = (0..n).map(|i| lu.u()[(i, i)].abs()).collect();
+        let (dmin, dmax) = diag
+            .iter()
+            .fold((f64::INFINITY, 0.0f64), |(a, b), &d| (a.min(d), b.max(d)));
+        if !(dmin > 1e-14 * dmax) {
+            let worst = diag.iter().position(|&d| d == dmin).unwrap_or(0);
+            return Err(Error::SingularMatrix {
+                step,
+                param: "t",
+                at: t,
+                detail: format!(
+                    "dF/d(v,z) has pivot ratio {:.2e} at unknown `{}`",
+                    dmin / dmax,
+                    self.problem.names()[self.nd + worst]
+                ),
+            });
+        }
+        Ok(lu)
+    }
+
+    fn solve(
+        &mut self,
+        lu: &nalgebra::LU<f64, nalgebra::Dyn, nalgebra::Dyn>,
+        r: &[f64],
+    ) -> Vec<f64> {
+        let start = Instant::now();
+        let b = DVector::from_iterator(r.len(), r.iter().map(|x| -x));
+        let x = lu
+            .solve(&b)
+            .unwrap_or_else(|| DVector::from_element(r.len(), f64::NAN));
+        self.stats.solves += 1;
+        charge(&mut self.stats.solve_s, start);
+        x.iter().copied().collect()
+    }
+
+    /// Damped Newton on F(u, ., t) = 0 for (v, z), from `vz`.
+    fn newton(&mut self, u: &[f64], vz: &mut [f64], t: f64, tol: f64, step: usize) -> Result<f64> {
+        let mut f = self.eval0(u, vz, t);
+        self.stats.residual_evaluations += 1;
+        let mut res = norm(&f);
+        let mut it = 0;
+        while res > tol {
+            if it >= 100 {
+                return Err(Error::NoConvergence {
+                    step,
+                    param: "t",
+                    at: t,
+                    iterations: it,
+                    residual: res,
+                    tolerance: tol,
+                });
+            }
+            let lu = self.factorize(step, t)?;
+            let dx = self.solve(&lu, &f);
+            // Backtracking on |F|: the friction law is nearly flat away from
+            // zero slip, so full Newton steps overshoot.
+            let mut damping = 1.0;
+            let base = vz.to_vec();
+            loop {
+                for i in 0..vz.len() {
+                    vz[i] = base[i] + damping * dx[i];
+                }
+                f = self.eval0(u, vz, t);
+                self.stats.residual_evaluations += 1;
+                let r = norm(&f);
+                if r.is_finite() && (r < res || damping < 1e-10) {
+                    res = r;
+                    break;
+                }
+                damping *= 0.5;
+            }
+            it += 1;
+        }
+        Ok(res)
+    }
+}
+
+/// Integrates from u0 at cfg.t0 to cfg.t_end. `on_step` receives every
+/// accepted step (for outputs) and may stop the run with an error.
+pub fn run<P: DaeProblem>(
+    problem: &P,
+    u0: &[f64],
+    init: &Initialization,
+    cfg: &DaeConfig,
+    mut on_step: impl FnMut(&TimeStep, &Stats) -> Result<()>,
+) -> DaeResult {
+    let nd = problem.n_diff();
+    let na = problem.n_alg();
+    let mut eng = Engine {
+        problem,
+        tape: record_tape(problem, cfg.order),
+        nd,
+        na,
+        stats: Stats::default(),
+    };
+    let finish = |stats: Stats, stop: &str, t: f64, error: Option<Error>, r0: f64| DaeResult {
+        stats,
+        stop: error
+            .as_ref()
+            .map(|e| e.kind().to_string())
+            .unwrap_or_else(|| stop.to_string()),
+        t,
+        error,
+        initial_residual: r0,
+    };
+    let mut u = u0.to_vec();
+    let mut t = cfg.t0;
+    let (mut vz, newton_init) = match init {
+        Initialization::Newton { v, z } => ([v.clone(), z.clone()].concat(), true),
+        Initialization::Exact { v, z } => ([v.clone(), z.clone()].concat(), false),
+    };
+    let r0 = if newton_init {
+        match eng.newton(&u, &mut vz, t, cfg.newton_tol, 0) {
+            Ok(r) => r,
+            Err(e) => return finish(eng.stats, "", t, Some(e), f64::NAN),
+        }
+    } else {
+        norm(&eng.eval0(&u, &vz, t))
+    };
+    let n_ord = cfg.order;
+    for index in 0..cfg.max_steps {
+        if t >= cfg.t_end {
+            return finish(eng.stats, "end", t, None, r0);
+        }
+        match time_step(&mut eng, &u, &vz, t, index, cfg) {
+            Ok(step) => {
+                eng.stats.steps += 1;
+                let y = step.eval(step.t0 + step.length);
+                if y.iter().any(|x| !x.is_finite()) {
+                    let e = Error::NonFinite {
+                        step: index,
+                        param: "t",
+                        at: t,
+                        what: "series evaluation".into(),
+                    };
+                    return finish(eng.stats, "", t, Some(e), r0);
+                }
+                t = if step.t0 + step.length >= cfg.t_end {
+                    cfg.t_end
+                } else {
+                    step.t0 + step.length
+                };
+                u = y[..nd].to_vec();
+                vz = y[nd..].to_vec();
+                if let Err(e) = on_step(&step, &eng.stats) {
+                    return finish(eng.stats, "", t, Some(e), r0);
+                }
+                if cfg.correct && step.end_residual > cfg.residual_tol {
+                    if let Err(e) = eng.newton(&u, &mut vz, t, cfg.newton_tol, index) {
+                        return finish(eng.stats, "", t, Some(e), r0);
+                    }
+                    eng.stats.corrections += 1;
+                }
+            }
+            Err(Error::StepCollapse { .. }) => {
+                return finish(eng.stats, "singularity", t, None, r0);
+            }
+            Err(e) => return finish(eng.stats, "", t, Some(e), r0),
+        }
+        let _ = n_ord;
+    }
+    finish(eng.stats, "max_steps", t, None, r0)
+}
+
+fn time_step<P: DaeProblem>(
+    eng: &mut Engine<P>,
+    u0: &[f64],
+    vz0: &[f64],
+    t0: f64,
+    index: usize,
+    cfg: &DaeConfig,
+) -> Result<TimeStep> {
+    let (nd, n) = (eng.nd, eng.n());
+    let n_ord = cfg.order;
+    eng.eval0(u0, vz0, t0);
+    let lu = eng.factorize(index, t0)?;
+    let scale = 1.0 + norm(&(0..n).map(|j| eng.tape.output(j, 0)).collect::<Vec<_>>());
+    for p in 1..=n_ord {
+        let start = Instant::now();
+        for i in 0..nd {
+            let vprev = eng.tape.input_series(nd + i)[p - 1];
+            eng.tape.set_input(i, p, vprev / p as f64);
+        }
+        for i in 0..n {
+            eng.tape.set_input(nd + i, p, 0.0);
+        }
+        eng.tape
+            .set_input(nd + n, p, if p == 1 { 1.0 } else { 0.0 });
+        eng.tape.propagate(p);
+        let r: Vec<f64> = (0..n).map(|j| eng.tape.output(j, p)).collect();
+        eng.stats.series_terms += 1;
+        charge(&mut eng.stats.series_s, start);
+        let x = eng.solve(&lu, &r);
+        let start = Instant::now();
+        for (i, xi) in x.iter().enumerate() {
+            eng.tape.set_input(nd + i, p, *xi);
+        }
+        eng.tape.propagate(p);
+        charge(&mut eng.stats.series_s, start);
+        let defect = norm(&(0..n).map(|j| eng.tape.output(j, p)).collect::<Vec<_>>());
+        if !defect.is_finite() || x.iter().any(|v| !v.is_finite()) {
+            return Err(Error::NonFinite {
+                step: index,
+                param: "t",
+                at: t0,
+                what: format!("series term of order {p}"),
+            });
+        }
+    }
+    let series: Vec<Vec<f64>> = (0..nd + n)
+        .map(|i| eng.tape.input_series(i).to_vec())
+        .collect();
+    // Ratio rule a = (eps |y_1| / |y_N|)^(1/(N-1)) on y = (u, v, z).
+    let term = |p: usize| series.iter().map(|c| c[p]).collect::<Vec<f64>>();
+    let (n1, nn) = (norm(&term(1)), norm(&term(n_ord)));
+    let cap = 1e15f64.powf(1.0 / n_ord as f64);
+    let a_max = if nn > 0.0 && n1 > 0.0 {
+        (cfg.eps * n1 / nn)
+            .powf(1.0 / (n_ord as f64 - 1.0))
+            .min(cap)
+    } else {
+        cap
+    };
+    if a_max < cfg.min_step {
+        return Err(Error::StepCollapse {
+            step: index,
+            param: "t",
+            at: t0,
+            length: a_max,
+        });
+    }
+    let length = a_max.min(cfg.t_end - t0);
+    let mut step = TimeStep {
+        index,
+        t0,
+        length,
+        series,
+        end_residual: 0.0,
+    };
+    let y = step.eval(t0 + length);
+    let f = eng.eval0(&y[..nd], &y[nd..], t0 + length);
+    eng.stats.residual_evaluations += 1;
+    step.end_residual = norm(&f) / scale;
+    Ok(step)
+}

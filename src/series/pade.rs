@@ -1,0 +1,208 @@
+//! Padé approximants with a common denominator for vector series
+//! (Najah, Cochelin, Damil, Potier-Ferry, Commun. Numer. Meth. Eng. 14 (1998);
+//! Cochelin, Damil, Potier-Ferry 2007, §4.4).
+//!
+//! The terms W_1..W_{n-1} are orthonormalised (Gram-Schmidt) into w*_j with
+//! W_k = sum_{j<=k} alpha_{kj} w*_j, and W_n is projected on them. The
+//! denominator coefficients follow from
+//!   d_1 = -alpha_{n,n-1}/alpha_{n-1,n-1},
+//!   d_i = -(alpha_{n,n-i} + sum_{j=1}^{i-1} d_j alpha_{n-j,n-i}) / alpha_{n-i,n-i},
+//! and the approximant is W(a) = sum_{k=1}^{n-1} a^k W_k D_{n-1-k}(a)/D_{n-1}(a),
+//! with D_m(a) = 1 + sum_{i=1}^{m} d_i a^i.
+
+use crate::linalg::{dot, norm};
+
+/// Common-denominator Padé approximant built from `terms[1..=n]`.
+#[derive(Clone, Debug)]
+pub struct Pade {
+    /// d_1..d_{n-1}.
+    d: Vec<f64>,
+}
+
+impl Pade {
+    /// Returns `None` when the terms are numerically dependent (the
+    /// approximant is then meaningless and the polynomial should be used).
+    pub fn new(terms: &[Vec<f64>], n: usize) -> Option<Self> {
+        if n < 3 {
+            return None;
+        }
+        let m = n - 1;
+        let mut basis: Vec<Vec<f64>> = Vec::with_capacity(m);
+        // alpha[k][j], k = 1..=n, j = 1..=min(k, m)  (1-based, stored 0-based).
+        let mut alpha = vec![vec![0.0; m]; n];
+        for k in 1..=n {
+            let mut w = terms[k].clone();
+            let jmax = k.min(m);
+            for j in 1..=jmax {
+                if j == k {
+                    break;
+                }
+                let a = dot(&w, &basis[j - 1]);
+                alpha[k - 1][j - 1] = a;
+                // Modified Gram-Schmidt: subtract as we go.
+                for (wi, bi) in w.iter_mut().zip(&basis[j - 1]) {
+                    *wi -= a * bi;
+                }
+            }
+            if k <= m {
+                let nk = norm(&w);
+                if !(nk > 1e-13 * norm(&terms[k])) {
+                    return None;
+                }
+                alpha[k - 1][k - 1] = nk;
+                basis.push(w.iter().map(|x| x / nk).collect());
+            }
+        }
+        let al = |k: usize, j: usize| alpha[k - 1][j - 1];
+        let mut d = Vec::with_capacity(m);
+        for i in 1..=m {
+            let mut s = al(n, n - i);
+            for j in 1..i {
+                s += d[j - 1] * al(n - j, n - i);
+            }
+            d.push(-s / al(n - i, n - i));
+        }
+        if d.iter().all(|x| x.is_finite()) {
+            Some(Self { d })
+        } else {
+            None
+        }
+    }
+
+    /// D_j(a) for j = 0..=n-1.
+    fn denominators(&self, a: f64) -> Vec<f64> {
+        let mut out = Vec::with_capacity(self.d.len() + 1);
+        let mut acc = 1.0;
+        let mut ai = 1.0;
+        out.push(acc);
+        for di in &self.d {
+            ai *= a;
+            acc += di * ai;
+            out.push(acc);
+        }
+        out
+    }
+
+    /// The increment W(a) - W_0.
+    pub fn eval(&self, terms: &[Vec<f64>], a: f64) -> Vec<f64> {
+        let m = self.d.len();
+        let dens = self.denominators(a);
+        let mut out = vec![0.0; terms[1].len()];
+        let mut ak = 1.0;
+        for k in 1..=m {
+            ak *= a;
+            let f = ak * dens[m - k] / dens[m];
+            for (o, t) in out.iter_mut().zip(&terms[k]) {
+                *o += f * t;
+            }
+        }
+        out
+    }
+
+    /// Smallest positive real root of D_{n-1} below `limit`, if any.
+    pub fn pole(&self, limit: f64) -> Option<f64> {
+        let m = self.d.len();
+        let f = |a: f64| self.denominators(a)[m];
+        let samples = 400;
+        let mut lo = 0.0;
+        let mut flo: f64 = 1.0;
+        for s in 1..=samples {
+            let hi = limit * s as f64 / samples as f64;
+            let fhi = f(hi);
+            if fhi.signum() != flo.signum() {
+                let (mut a, mut b) = (lo, hi);
+                for _ in 0..60 {
+                    let c = 0.5 * (a + b);
+                    if f(c).signum() == flo.signum() {
+                        a = c;
+                    } else {
+                        b = c;
+                    }
+                }
+                return Some(a);
+            }
+            lo = hi;
+            flo = fhi;
+        }
+        None
+    }
+}
+
+/// Range of the Padé approximant: the largest a in [a_poly, a_cap] (below the
+/// first pole) with |P_n(a) - P_{n-1}(a)| <= eps |P_n(a)|, found by bisection.
+/// Returns `None` when Padé cannot be built.
+pub fn range(terms: &[Vec<f64>], n: usize, eps: f64, a_poly: f64, a_cap: f64) -> Option<f64> {
+    let pn = Pade::new(terms, n)?;
+    let pm = Pade::new(terms, n - 1)?;
+    let mut hi = a_cap;
+    for p in [&pn, &pm] {
+        if let Some(pole) = p.pole(a_cap) {
+            hi = hi.min(0.95 * pole);
+        }
+    }
+    if hi <= a_poly {
+        return Some(a_poly);
+    }
+    let ok = |a: f64| {
+        let x = pn.eval(terms, a);
+        let y = pm.eval(terms, a);
+        let diff: Vec<f64> = x.iter().zip(&y).map(|(a, b)| a - b).collect();
+        norm(&diff) <= eps * norm(&x)
+    };
+    if !ok(a_poly) {
+        return Some(a_poly);
+    }
+    if ok(hi) {
+        return Some(hi);
+    }
+    let (mut lo, mut up) = (a_poly, hi);
+    for _ in 0..40 {
+        let mid = 0.5 * (lo + up);
+        if ok(mid) {
+            lo = mid;
+        } else {
+            up = mid;
+        }
+    }
+    Some(lo)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn reproduces_a_rational_vector_function() {
+        // W_i(a) = a^i / (1 - 2a), i = 1..11: W_k = sum_{i<=k} e_i 2^(k-i).
+        // The common-denominator approximant is exact, and its pole is 0.5,
+        // beyond the polynomial's radius of convergence.
+        let n = 12;
+        let dim = n - 1;
+        let mut terms = vec![vec![0.0; dim]];
+        for k in 1..=n {
+            let t: Vec<f64> = (1..=dim)
+                .map(|i| {
+                    if i <= k {
+                        2f64.powi((k - i) as i32)
+                    } else {
+                        0.0
+                    }
+                })
+                .collect();
+            terms.push(t);
+        }
+        let p = Pade::new(&terms, n).expect("pade");
+        let a = 0.45;
+        let got = p.eval(&terms, a);
+        for i in 1..=dim {
+            let want = a.powi(i as i32) / (1.0 - 2.0 * a);
+            assert!(
+                (got[i - 1] - want).abs() < 1e-10 * want.abs().max(1.0),
+                "{i}: {} vs {want}",
+                got[i - 1]
+            );
+        }
+        let pole = p.pole(1.0).expect("pole");
+        assert!((pole - 0.5).abs() < 1e-9, "pole {pole}");
+    }
+}

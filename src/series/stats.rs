@@ -1,0 +1,30 @@
+//! Counters and timers of a run: what a step costs and where the time goes.
+
+use serde::Serialize;
+use std::time::Instant;
+
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct Stats {
+    /// Accepted steps.
+    pub steps: usize,
+    /// Numeric factorizations of a tangent or Jacobian matrix.
+    pub factorizations: usize,
+    /// Triangular solves with a factorization.
+    pub solves: usize,
+    /// Full residual evaluations (step-end checks, Newton).
+    pub residual_evaluations: usize,
+    /// Series right-hand sides (one per order and step).
+    pub series_terms: usize,
+    /// Newton corrections (iterations) after a series step.
+    pub corrections: usize,
+    /// Seconds spent assembling tangents (and residuals).
+    pub assembly_s: f64,
+    pub factorization_s: f64,
+    pub solve_s: f64,
+    pub series_s: f64,
+}
+
+/// Adds the seconds elapsed since `start` to `slot`.
+pub fn charge(slot: &mut f64, start: Instant) {
+    *slot += start.elapsed().as_secs_f64();
+}
