@@ -17,6 +17,11 @@
 pub mod contact;
 pub mod error;
 pub mod linalg;
+pub mod mesh;
+pub mod model;
+pub mod output;
+pub mod scene;
 pub mod series;
+pub mod shell;
 
 pub use error::{Error, Result};

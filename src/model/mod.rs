@@ -1,0 +1,1 @@
+//! Assembly of a scene into the problems the series engine solves.

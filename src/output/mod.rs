@@ -1,0 +1,62 @@
+//! Run outputs: CSV curves, summary.json, SVG plots.
+
+pub mod plot;
+
+use crate::error::{Error, Result};
+use serde::Serialize;
+use std::path::Path;
+
+/// Writes a CSV file with a header row; values in full precision.
+pub fn write_csv(path: &Path, header: &[&str], rows: &[Vec<f64>]) -> Result<()> {
+    let err = |e: csv::Error| Error::Output(format!("{}: {e}", path.display()));
+    let mut w = csv::Writer::from_path(path).map_err(err)?;
+    w.write_record(header).map_err(err)?;
+    for row in rows {
+        if let Some(bad) = row.iter().position(|x| !x.is_finite()) {
+            return Err(Error::Output(format!(
+                "{}: refusing to write non-finite `{}` = {}",
+                path.display(),
+                header.get(bad).unwrap_or(&"?"),
+                row[bad]
+            )));
+        }
+        w.write_record(row.iter().map(|x| format!("{x:.17e}")))
+            .map_err(err)?;
+    }
+    w.flush()
+        .map_err(|e| Error::Output(format!("{}: {e}", path.display())))
+}
+
+/// Writes any serializable value as pretty JSON.
+pub fn write_json<T: Serialize>(path: &Path, value: &T) -> Result<()> {
+    let text = serde_json::to_string_pretty(value)
+        .map_err(|e| Error::Output(format!("{}: {e}", path.display())))?;
+    std::fs::write(path, text + "\n").map_err(|e| Error::Io {
+        file: path.to_path_buf(),
+        source: e,
+    })
+}
+
+/// Creates the output directory (and parents).
+pub fn create_dir(dir: &Path) -> Result<()> {
+    std::fs::create_dir_all(dir).map_err(|e| Error::Io {
+        file: dir.to_path_buf(),
+        source: e,
+    })
+}
+
+/// Why and where a run stopped (summary.json `stop`).
+#[derive(Clone, Debug, Serialize)]
+pub struct Stop {
+    /// "end", "singularity", "max_steps" or an error kind.
+    pub reason: String,
+    /// Time of the stop (DAE runs).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub t: Option<f64>,
+    /// Load parameter of the stop (continuation runs).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub lambda: Option<f64>,
+    /// Human-readable diagnosis for anything but a normal end.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub message: Option<String>,
+}

@@ -1,0 +1,1 @@
+//! TOML scene files (serde, deny_unknown_fields), validated into models.

@@ -1,0 +1,1 @@
+//! 3D shell element with EAS (quadratic kinematics), quadrature.
