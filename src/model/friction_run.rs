@@ -36,6 +36,10 @@ pub struct FrictionRun {
     /// test), or where the step lengths extrapolate to zero
     /// (a_k ≈ c (t* - t_k) fitted on the last steps).
     pub t_singular_estimate: Option<f64>,
+    /// Steps whose series revealed a singular point: (t0, located t*).
+    pub singular_events: Vec<(f64, f64)>,
+    /// The accepted steps' series (u, v, z), for checks and dense output.
+    pub series: Vec<crate::series::TimeStep>,
 }
 
 /// Solves the scene; writes the outputs into `out_dir` when given.
@@ -66,11 +70,13 @@ pub fn run(scene: &FrictionScene, out_dir: Option<&Path>, progress: bool) -> Res
         correct: scene.correct,
         residual_tol: scene.residual_tol,
         min_step: scene.min_step,
+        stop_at_singularity: scene.stop_at_singularity,
     };
     let grid = scene.output_times();
     let mut next = 0;
     let mut history = Vec::with_capacity(grid.len());
     let mut steps = Vec::new();
+    let mut series = Vec::new();
     let bar = progress_bar(progress, scene.t_end);
     let result = dae::run(model, &model.u0(), &init, &cfg, |step, stats| {
         let t1 = step.t0 + step.length;
@@ -90,6 +96,7 @@ pub fn run(scene: &FrictionScene, out_dir: Option<&Path>, progress: bool) -> Res
         ];
         row.extend(model.row(t1, &y, &derivative(step, t1)).into_iter().skip(1));
         steps.push(row);
+        series.push(step.clone());
         if let Some(b) = &bar {
             b.set_position((1000.0 * t1 / scene.t_end) as u64);
             b.set_message(format!(
@@ -146,6 +153,8 @@ pub fn run(scene: &FrictionScene, out_dir: Option<&Path>, progress: bool) -> Res
         wall_s,
         stop,
         t_singular_estimate,
+        singular_events: result.events.clone(),
+        series,
     };
     if let Some(dir) = out_dir {
         write_outputs(&run, model, scene, dir)?;
@@ -233,6 +242,8 @@ struct Summary<'a> {
     stop: &'a Stop,
     #[serde(skip_serializing_if = "Option::is_none")]
     t_singular_estimate: Option<f64>,
+    /// (t0, t*) of every step whose series was geometric.
+    singular_events: &'a [(f64, f64)],
     scene: &'a str,
     kind: &'a str,
     columns: &'a [String],
@@ -253,6 +264,7 @@ impl<'a> From<&'a FrictionRun> for Summary<'a> {
             wall_s: run.wall_s,
             stop: &run.stop,
             t_singular_estimate: run.t_singular_estimate,
+            singular_events: &run.singular_events,
             scene: &run.scene,
             kind: &run.kind,
             columns: &run.columns,

@@ -8,7 +8,7 @@
 //! [obstacle]  V = 1.0                      # plane speed (1d, plane); roller: r, Omega
 //! [load]      F = 1.0                      # N/s (plane, roller); friction-1d: RN (N)
 //! [initial]   mode = "newton", u0 = 0.0, v0 = 1.0
-//! [solver]    order = 20, eps = 1e-10, t_end = 3.0
+//! [solver]    order = 20, eps = 1e-10, t_end = 3.0, on_singularity = "stop"  # or "continue"
 //! [output]    dt = 0.01
 //! ```
 
@@ -105,6 +105,7 @@ struct RawSolver {
     newton_tol: Option<f64>,
     residual_tol: Option<f64>,
     correct: Option<bool>,
+    on_singularity: Option<String>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -162,6 +163,9 @@ pub struct FrictionScene {
     pub newton_tol: f64,
     pub residual_tol: f64,
     pub correct: bool,
+    /// Stop at the first singular point the series reveals ("stop"), or
+    /// record it and go on ("continue").
+    pub stop_at_singularity: bool,
     pub dt: f64,
     pub plot: bool,
 }
@@ -319,6 +323,16 @@ pub fn load(path: &Path, text: &str, kind: Kind) -> Result<FrictionScene> {
     let min_step = c.positive("solver.min_step", s.min_step.unwrap_or(1e-9 * t_end))?;
     let newton_tol = c.positive("solver.newton_tol", s.newton_tol.unwrap_or(1e-14))?;
     let residual_tol = c.positive("solver.residual_tol", s.residual_tol.unwrap_or(1e-8))?;
+    let stop_at_singularity = match s.on_singularity.as_deref() {
+        None | Some("stop") => true,
+        Some("continue") => false,
+        Some(other) => {
+            return Err(c.fail(
+                "solver.on_singularity",
+                format!("expected \"stop\" or \"continue\", got \"{other}\""),
+            ));
+        }
+    };
     let dt = c.positive("output.dt", raw.output.dt)?;
     if dt > t_end {
         return Err(c.fail(
@@ -353,6 +367,7 @@ pub fn load(path: &Path, text: &str, kind: Kind) -> Result<FrictionScene> {
         newton_tol,
         residual_tol,
         correct: s.correct.unwrap_or(true),
+        stop_at_singularity,
         dt,
         plot: raw.output.plot.unwrap_or(true),
     })

@@ -62,6 +62,9 @@ pub struct DaeConfig {
     /// A step shorter than this means the solution ceased to be smooth: the
     /// run stops with reason "singularity".
     pub min_step: f64,
+    /// Stop at the first singular point the series reveals (geometric-series
+    /// test); otherwise record it as an event and go on with the step.
+    pub stop_at_singularity: bool,
 }
 
 /// One accepted time step.
@@ -100,6 +103,8 @@ pub struct DaeResult {
     pub t: f64,
     /// Located singular point: t0 + alpha_1 from the geometric-series test.
     pub t_singular: Option<f64>,
+    /// Every step whose series was geometric: (t0, located singular point).
+    pub events: Vec<(f64, f64)>,
     pub error: Option<Error>,
     /// Initial (v, z) actually used and |F| there.
     pub initial_residual: f64,
@@ -263,6 +268,7 @@ pub fn run<P: DaeProblem + ?Sized>(
             .unwrap_or_else(|| stop.to_string()),
         t,
         t_singular: None,
+        events: Vec::new(),
         error,
         initial_residual: r0,
     };
@@ -280,20 +286,30 @@ pub fn run<P: DaeProblem + ?Sized>(
     } else {
         norm(&eng.eval0(&u, &vz, t))
     };
+    let mut events = Vec::new();
+    let finish_with_events = |mut r: DaeResult, events: Vec<(f64, f64)>| {
+        r.events = events;
+        r
+    };
     for index in 0..cfg.max_steps {
         if t >= cfg.t_end {
-            return finish(eng.stats, "end", t, None, r0);
+            return finish_with_events(finish(eng.stats, "end", t, None, r0), events);
         }
         match time_step(&mut eng, &u, &vz, t, index, cfg) {
-            Ok(step) if step.geometric.is_some() => {
+            Ok(step) if step.geometric.is_some() && cfg.stop_at_singularity => {
                 // The last terms form a geometric series: a singular point
                 // lies at t0 + alpha_1, within reach of this step. Stop at the
                 // last regular point and report where the singularity is.
+                let t_star = t + step.geometric.unwrap_or(0.0);
+                events.push((t, t_star));
                 let mut r = finish(eng.stats, "singularity", t, None, r0);
-                r.t_singular = step.geometric.map(|d| t + d);
-                return r;
+                r.t_singular = Some(t_star);
+                return finish_with_events(r, events);
             }
             Ok(step) => {
+                if let Some(d) = step.geometric {
+                    events.push((t, t + d));
+                }
                 eng.stats.steps += 1;
                 let y = step.eval(step.t0 + step.length);
                 if y.iter().any(|x| !x.is_finite()) {
