@@ -44,6 +44,7 @@ fn stops_at_the_breakdown_with_a_singularity() {
 }
 
 #[test]
+#[allow(clippy::needless_range_loop)] // row i across the column vectors
 fn trajectory_solves_the_cartesian_equations_before_the_breakdown() {
     let scene = friction_scene("friction-roller.toml", &[]);
     let r = run(&scene, None, false).unwrap();

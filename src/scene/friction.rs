@@ -297,13 +297,13 @@ pub fn load(path: &Path, text: &str, kind: Kind) -> Result<FrictionScene> {
         }
     };
     let s = &raw.solver;
-    if let Some(m) = s.method.as_deref() {
-        if m != "anm" {
-            return Err(c.fail(
-                "solver.method",
-                format!("friction scenes support \"anm\" only, got \"{m}\""),
-            ));
-        }
+    if let Some(m) = s.method.as_deref()
+        && m != "anm"
+    {
+        return Err(c.fail(
+            "solver.method",
+            format!("friction scenes support \"anm\" only, got \"{m}\""),
+        ));
     }
     if s.order < 2 {
         return Err(c.fail("solver.order", format!("must be >= 2, got {}", s.order)));

@@ -297,13 +297,12 @@ fn series_step<P: ContinuationProblem>(
         u_end: vec![],
         lambda_end: 0.0,
     };
-    if cfg.pade {
-        if let Some(a) = pade::range(&terms, n_ord, cfg.eps, a_poly, cap.min(10.0 * a_poly)) {
-            if a > a_poly {
-                step.pade = pade::Pade::new(&terms, n_ord);
-                step.length = a;
-            }
-        }
+    if cfg.pade
+        && let Some(a) = pade::range(&terms, n_ord, cfg.eps, a_poly, cap.min(10.0 * a_poly))
+        && a > a_poly
+    {
+        step.pade = pade::Pade::new(&terms, n_ord);
+        step.length = a;
     }
     if step.length < cfg.min_step {
         return Err(Error::StepCollapse {
@@ -315,10 +314,10 @@ fn series_step<P: ContinuationProblem>(
     }
     // Do not overshoot the target load.
     let (_, l_end) = step.eval(step.length);
-    if (l_end - cfg.lambda_end) * forward > 0.0 {
-        if let Some(a) = step.a_at_lambda(cfg.lambda_end) {
-            step.length = a;
-        }
+    if (l_end - cfg.lambda_end) * forward > 0.0
+        && let Some(a) = step.a_at_lambda(cfg.lambda_end)
+    {
+        step.length = a;
     }
     let (mut u_end, mut l_end) = step.eval(step.length);
     if (l_end - cfg.lambda_end) * forward > 0.0 && (l_end - cfg.lambda_end).abs() < 1e-9 {
