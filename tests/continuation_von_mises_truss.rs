@@ -175,3 +175,68 @@ fn pade_covers_more_path_in_the_same_steps_on_a_30_dof_problem() {
         covered[0]
     );
 }
+
+#[test]
+fn newton_baseline_follows_the_same_path() {
+    // Arclength Newton (the baseline of the benchmarks) through both limit
+    // points, landing exactly on requested load levels. Load control cannot
+    // follow the unstable part: past lambda_max it snaps through to the far
+    // stable branch, w > H (1 + 1/sqrt 3).
+    use anm::series::newton::{Control, NewtonConfig, run as newton};
+    let lmax = 2.0 * H.powi(3) * EA / (3.0 * 3f64.sqrt() * l0().powi(3)) / P_REF;
+    let targets = [0.5 * lmax, 1.5 * lmax];
+    let cfg = NewtonConfig {
+        control: Control::Arclength,
+        initial_step: 0.1,
+        tol: 1e-12,
+        lambda_end: 2.0 * lmax,
+        ..Default::default()
+    };
+    let mut problem = truss(2);
+    let mut worst: f64 = 0.0;
+    let mut hits = vec![];
+    let mut w_max: f64 = 0.0;
+    let r = newton(&mut problem, vec![0.0], 0.0, &cfg, &targets, |u, l, _| {
+        worst = worst.max((l - lambda_exact(u[0])).abs() / lmax);
+        w_max = w_max.max(u[0]);
+        if targets
+            .iter()
+            .chain([&(2.0 * lmax)])
+            .any(|t| (t - l).abs() < 1e-12)
+        {
+            hits.push(l);
+        }
+        Ok(())
+    });
+    println!(
+        "Newton arclength: stop {}, {} steps, {} factorizations, error {worst:.1e}, targets hit {hits:?}",
+        r.stop, r.stats.steps, r.stats.factorizations
+    );
+    assert_eq!(r.stop, "end", "{:?}", r.error);
+    assert!(w_max > 2.0 * H);
+    assert!(worst <= 1e-10, "error {worst:e}");
+    assert!(hits.len() >= 3, "targets hit: {hits:?}");
+
+    let load = NewtonConfig {
+        control: Control::Load,
+        ..cfg
+    };
+    let mut problem = truss(2);
+    let mut snapped = None;
+    let r = newton(&mut problem, vec![0.0], 0.0, &load, &[], |u, l, _| {
+        if l > lmax && snapped.is_none() {
+            snapped = Some((l, u[0]));
+        }
+        Ok(())
+    });
+    println!(
+        "Newton load control: stop {}; first point past lambda_max: {snapped:?}",
+        r.stop
+    );
+    let (_, w) = snapped.expect("a converged point past lambda_max");
+    assert!(
+        w > H * (1.0 + 1.0 / 3f64.sqrt()),
+        "w = {w}: not on the far branch"
+    );
+    assert!((w * w - 2.0 * H * w) * (w - H) > 0.0);
+}

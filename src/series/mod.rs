@@ -6,6 +6,7 @@
 pub mod continuation;
 pub mod dae;
 pub mod geometric;
+pub mod newton;
 pub mod pade;
 pub mod stats;
 pub mod tape;
