@@ -49,6 +49,21 @@ enum Command {
         #[arg(short, long, value_name = "DIR")]
         out: PathBuf,
     },
+    /// Work-precision benchmark: error against wall time per method and
+    /// setting (bench.csv, bench.md, bench.svg). Wall times are medians.
+    Bench {
+        /// Folder holding the canonical scenes.
+        #[arg(long, default_value = "scenes")]
+        scenes: PathBuf,
+        /// Cases to run (comma-separated).
+        #[arg(long, value_delimiter = ',', default_values_t = ["friction-1d".to_string(), "friction-plane".to_string(), "friction-roller".to_string()])]
+        cases: Vec<String>,
+        /// Repetitions per setting (the median time is reported).
+        #[arg(long, default_value_t = 3)]
+        repeat: usize,
+        #[arg(short, long, value_name = "DIR")]
+        out: PathBuf,
+    },
     /// Stability stress matrix on the friction scenes: every run must meet its
     /// accuracy check or stop with a diagnosis (stress.md, stress.csv).
     Stress {
@@ -116,6 +131,63 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
             anm::study::audit::write(&sc, &rows, &out)?;
             print!("{}", anm::study::audit::markdown(&sc, &rows));
             println!("\noutputs in {}", out.display());
+            Ok(ExitCode::SUCCESS)
+        }
+        Command::Bench {
+            scenes,
+            cases,
+            repeat,
+            out,
+        } => {
+            use anm::study::bench;
+            let with_ida = cfg!(feature = "reference");
+            let mut rows = vec![];
+            let mut reference_name = String::new();
+            for case in &cases {
+                let (_, sc) = load(&scenes.join(format!("{case}.toml")))?;
+                let Some(sc) = sc else {
+                    anyhow::bail!("bench case `{case}` is not available in this build")
+                };
+                let ref_method = if with_ida {
+                    bench::Method::Ida { rtol: 1e-12 }
+                } else {
+                    bench::Method::Anm {
+                        order: 30,
+                        eps: 1e-14,
+                    }
+                };
+                reference_name = format!("{} {}", ref_method.label(), ref_method.setting());
+                let reference = bench::solve(&sc, &ref_method)?;
+                // friction-roller: compare up to 0.05 s before the breakdown.
+                let anm_ref = bench::solve(
+                    &sc,
+                    &bench::Method::Anm {
+                        order: 30,
+                        eps: 1e-14,
+                    },
+                )?;
+                let t_max = if anm_ref.stop == "singularity" {
+                    anm_ref.t_stop - 0.05
+                } else {
+                    sc.t_end
+                };
+                eprintln!(
+                    "{case}: reference {reference_name}; ANM(30, 1e-14) differs from it by {:.2e} on t <= {t_max:.4}",
+                    bench::error(&anm_ref, &reference, t_max)
+                );
+                let r = bench::work_precision(
+                    case,
+                    &sc,
+                    &bench::friction_methods(with_ida),
+                    &reference,
+                    t_max,
+                    repeat,
+                );
+                print!("{}", bench::markdown(&r, &reference_name));
+                rows.extend(r);
+            }
+            bench::write(&rows, &reference_name, &out)?;
+            println!("outputs in {}", out.display());
             Ok(ExitCode::SUCCESS)
         }
         Command::Stress {

@@ -2,6 +2,7 @@
 //! regularization audit and the stability stress matrix.
 
 pub mod audit;
+pub mod bench;
 pub mod check;
 pub mod pool;
 pub mod stress;
