@@ -51,7 +51,7 @@ enum ReferenceSolver {
         #[arg(long, default_value_t = 1e-10)]
         rtol: f64,
         /// Absolute tolerance.
-        #[arg(long, default_value_t = 1e-12)]
+        #[arg(long, default_value_t = 1e-10)]
         atol: f64,
     },
 }

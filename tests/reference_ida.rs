@@ -23,7 +23,7 @@ use anm::scene::{self, friction::FrictionScene};
 use std::path::Path;
 
 const RTOL: f64 = 1e-10;
-const ATOL: f64 = 1e-12;
+const ATOL: f64 = 1e-10;
 
 fn load(name: &str) -> FrictionScene {
     let path = Path::new(env!("CARGO_MANIFEST_DIR"))

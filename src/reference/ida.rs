@@ -234,19 +234,12 @@ impl<'a> Ida<'a> {
         // From here on, Drop frees whatever has been created.
         // SAFETY: ctx is valid; the handler's data is the boxed LastMessage
         // owned by `ida`, freed after the context (see Drop).
+        let last = &mut *ida.last_message as *mut LastMessage as *mut c_void;
         unsafe {
-            ida.check_code(
-                "SUNContext_ClearErrHandlers",
-                sys::SUNContext_ClearErrHandlers(ctx),
-            )?;
-            ida.check_code(
-                "SUNContext_PushErrHandler",
-                sys::SUNContext_PushErrHandler(
-                    ctx,
-                    Some(error_handler),
-                    &mut *ida.last_message as *mut LastMessage as *mut c_void,
-                ),
-            )?;
+            let rc = sys::SUNContext_ClearErrHandlers(ctx);
+            ida.check_code("SUNContext_ClearErrHandlers", rc)?;
+            let rc = sys::SUNContext_PushErrHandler(ctx, Some(error_handler), last);
+            ida.check_code("SUNContext_PushErrHandler", rc)?;
         }
         let len = n as sys::sunindextype;
         // SAFETY: plain constructors on a valid context; results checked for NULL.
@@ -263,10 +256,9 @@ impl<'a> Ida<'a> {
             ida.mem = non_null("IDACreate", sys::IDACreate(ctx))?;
             ida.check("IDAInit", sys::IDAInit(ida.mem, Some(residual_cb), t0, ida.y, ida.yp))?;
             ida.check("IDASStolerances", sys::IDASStolerances(ida.mem, rtol, atol))?;
-            ida.check(
-                "IDASetUserData",
-                sys::IDASetUserData(ida.mem, &*ida.callback as *const Callback as *mut c_void),
-            )?;
+            let user = &*ida.callback as *const Callback as *mut c_void;
+            let rc = sys::IDASetUserData(ida.mem, user);
+            ida.check("IDASetUserData", rc)?;
             ida.mat = non_null("SUNDenseMatrix", sys::SUNDenseMatrix(len, len, ctx))?;
             ida.ls = non_null("SUNLinSol_Dense", sys::SUNLinSol_Dense(ida.y, ida.mat, ctx))?;
             ida.check(
@@ -396,6 +388,33 @@ impl<'a> Ida<'a> {
         // SAFETY: mem is valid; t is a local.
         let rc = unsafe { sys::IDAGetCurrentTime(self.mem, &mut t) };
         (rc == 0).then_some(t)
+    }
+
+    /// IDASetSuppressAlg: exclude the algebraic components from the local
+    /// error test (SUNDIALS discourages this for index-1 systems; not used by
+    /// [`crate::reference::solve`]).
+    pub fn set_suppress_alg(&mut self, suppress: bool) -> Result<(), IdaError> {
+        // SAFETY: mem is valid.
+        let rc = unsafe { sys::IDASetSuppressAlg(self.mem, suppress as c_int) };
+        self.check("IDASetSuppressAlg", rc)
+    }
+
+    /// IDAGetEstLocalErrors times IDAGetErrWeights: each component's share of
+    /// the weighted local error estimate of the last step (> 1 fails the test
+    /// in the weighted RMS norm).
+    pub fn weighted_local_errors(&mut self) -> Result<Vec<f64>, IdaError> {
+        // SAFETY: mem and the work vectors are valid; each call writes its vector.
+        let w = unsafe {
+            let rc = sys::IDAGetErrWeights(self.mem, self.work);
+            self.check("IDAGetErrWeights", rc)?;
+            slice(self.work, self.n).to_vec()
+        };
+        let e = unsafe {
+            let rc = sys::IDAGetEstLocalErrors(self.mem, self.work);
+            self.check("IDAGetEstLocalErrors", rc)?;
+            slice(self.work, self.n).to_vec()
+        };
+        Ok(w.iter().zip(&e).map(|(w, e)| w * e).collect())
     }
 
     /// The counters so far.
