@@ -37,7 +37,10 @@ fn load(name: &str) -> FrictionScene {
 fn ida(scene: &FrictionScene) -> IdaRun {
     let run = solve(scene, RTOL, ATOL).unwrap_or_else(|e| panic!("IDA failed: {e}"));
     for row in &run.history {
-        assert!(row.iter().all(|v| v.is_finite()), "non-finite IDA row {row:?}");
+        assert!(
+            row.iter().all(|v| v.is_finite()),
+            "non-finite IDA row {row:?}"
+        );
     }
     println!(
         "IDA {} on {}: stop {} at t = {:.9} s; {} steps, {} res, {} jac, {} setups, {:.3} s, max constraint drift {:.2e}",
@@ -64,6 +67,16 @@ fn col(run_cols: &[String], name: &str) -> usize {
 
 /// (a) friction-plane, q = 0, omega = zeta = 1e-3, eta = 1e-8, K = 1e8:
 /// u_x = (f/k) F (t - 1) within 1% for t in [1.2, 3].
+///
+/// IDA tolerances here: rtol 1e-6, atol 1e-8. With these regularizations the
+/// DAE is extremely ill-conditioned: before contact the slip velocity obeys
+/// dv_x/du_x = -k / (f zeta g'(-V)) = -5e9 after the stick-slip transition
+/// (t ~ 2e-4 s), and the contact transition at t = 1 s is ~1e-8 s wide. At
+/// rtol 1e-10 or 1e-7 IDA's step collapses (t ~ 2e-4 s, t ~ 1 s); at looser
+/// tolerances it steps over the contact and its Newton iteration lands on the
+/// quadratic contact law's other root (R_N ~ -1e-8, the mass passing through
+/// the plane, u_y -> -3). rtol 1e-6 / atol 1e-8 resolves both (about 2.5e5
+/// steps); the branch is checked below.
 #[test]
 fn ida_plane_coulomb_closed_form() {
     let mut sc = load("friction-plane");
@@ -73,12 +86,33 @@ fn ida_plane_coulomb_closed_form() {
     let c = sc.contact.as_mut().expect("contact");
     c.eta = 1e-8;
     c.k = 1e8;
-    let run = ida(&sc);
+    let run = solve(&sc, 1e-6, 1e-8).unwrap_or_else(|e| panic!("IDA failed: {e}"));
+    println!(
+        "IDA on plane q=0: stop {} at t = {:.9}; {} steps, {} res, {} jac, {:.3} s",
+        run.stop.reason,
+        run.stop.t,
+        run.counters.steps,
+        run.counters.residual_evals,
+        run.counters.jacobian_evals,
+        run.wall_s
+    );
     assert_eq!(run.stop.reason, "end", "{:?}", run.stop);
-    let ux = col(&run.columns, "ux");
+    let (ux, uy, rn) = (
+        col(&run.columns, "ux"),
+        col(&run.columns, "uy"),
+        col(&run.columns, "rn"),
+    );
     let (f, k, ff) = (sc.friction.f, sc.k, sc.load_rate);
     let mut worst: (f64, f64, f64, f64) = (0.0, 0.0, 0.0, 0.0);
     for row in run.history.iter().filter(|r| r[0] >= 1.2 - 1e-12) {
+        assert!(row.iter().all(|v| v.is_finite()), "{row:?}");
+        assert!(
+            row[uy] > -1.0 - 1e-6 && row[rn] > 0.0,
+            "t = {}: u_y = {}, R_N = {}: not on the contact branch",
+            row[0],
+            row[uy],
+            row[rn]
+        );
         let exact = f / k * ff * (row[0] - 1.0);
         let rel = (row[ux] - exact).abs() / exact.abs();
         if rel > worst.0 {
@@ -111,36 +145,47 @@ fn ida_1d_plateau() {
     assert!(rel <= 1e-8, "plateau off by {rel:e}");
 }
 
-/// (a) The roller's Cartesian index-1 form in the plane limit: radius 1e5 m,
-/// Omega r = -V (the top moves at +V), against the plane formulation.
+/// (a) The roller's Cartesian index-1 form in the plane limit: radius r,
+/// Omega r = -V (the top moves at +V), against the plane formulation. The
+/// difference is the geometry's O(u/r) effect (normal tilt u_x/r): it must be
+/// small at r = 1e3 and shrink like 1/r from r = 1e2. (Radii above ~1e4 put
+/// the gap h = |x - C| - r at round-off noise the rtol 1e-10 error test sees.)
 #[test]
 fn ida_roller_plane_limit() {
     let plane = load("friction-plane");
-    let mut sc = load("friction-roller");
+    let flat = ida(&plane);
     let v = match plane.obstacle {
         anm::scene::friction::Obstacle::Plane { v } => v,
         _ => unreachable!(),
     };
-    let r = 1e5;
-    sc.obstacle = anm::scene::friction::Obstacle::Roller { r, omega: -v / r };
-    sc.friction = plane.friction;
-    sc.contact = plane.contact;
-    sc.load_rate = plane.load_rate;
-    sc.k = plane.k;
-    sc.t_end = plane.t_end;
-    sc.dt = plane.dt;
-    let model = anm::reference::run::model(&sc).expect("model");
-    let roller = solve_model(&sc, model.as_ref(), RTOL, ATOL).expect("IDA roller");
-    let flat = ida(&plane);
-    assert_eq!(roller.stop.reason, "end", "{:?}", roller.stop);
-    println!(
-        "roller r = 1e5: {} steps, max constraint drift {:.2e}",
-        roller.counters.steps, roller.max_constraint_drift
-    );
-    let errs = column_errors(&flat.columns, &roller.history, &flat.history, f64::INFINITY);
-    print_table("roller(r = 1e5) vs plane, IDA", &errs);
-    for (name, e) in &errs {
-        assert!(*e <= 1e-3, "{name}: {e:e}");
+    let mut errs = Vec::new();
+    for r in [1e2, 1e3] {
+        let mut sc = load("friction-roller");
+        sc.obstacle = anm::scene::friction::Obstacle::Roller { r, omega: -v / r };
+        sc.friction = plane.friction;
+        sc.contact = plane.contact;
+        sc.load_rate = plane.load_rate;
+        sc.k = plane.k;
+        sc.t_end = plane.t_end;
+        sc.dt = plane.dt;
+        let model = anm::reference::run::model(&sc).expect("model");
+        let roller = solve_model(&sc, model.as_ref(), RTOL, ATOL).expect("IDA roller");
+        println!(
+            "roller r = {r:e}: stop {} at t = {}, {} steps, max constraint drift {:.2e}",
+            roller.stop.reason, roller.stop.t, roller.counters.steps, roller.max_constraint_drift
+        );
+        assert_eq!(roller.stop.reason, "end", "{:?}", roller.stop);
+        let e = column_errors(&flat.columns, &roller.history, &flat.history, f64::INFINITY);
+        print_table(&format!("roller (r = {r:e}) vs plane, IDA"), &e);
+        errs.push(e);
+    }
+    for ((name, e2), (_, e3)) in errs[0].iter().zip(&errs[1]) {
+        println!("  {name}: ratio err(r=1e2)/err(r=1e3) = {:.2}", e2 / e3);
+        assert!(*e3 <= 5e-3, "{name}: {e3:e} at r = 1e3");
+        assert!(
+            e2 / e3 >= 5.0,
+            "{name}: no 1/r convergence: {e2:e} -> {e3:e}"
+        );
     }
 }
 
@@ -152,11 +197,8 @@ fn column_errors(
     b: &[Vec<f64>],
     t_max: f64,
 ) -> Vec<(String, f64)> {
-    let rows: Vec<(&Vec<f64>, &Vec<f64>)> = a
-        .iter()
-        .zip(b)
-        .filter(|(ra, _)| ra[0] <= t_max)
-        .collect();
+    let rows: Vec<(&Vec<f64>, &Vec<f64>)> =
+        a.iter().zip(b).filter(|(ra, _)| ra[0] <= t_max).collect();
     assert!(!rows.is_empty(), "no rows to compare");
     for (ra, rb) in &rows {
         assert!(
@@ -174,7 +216,10 @@ fn column_errors(
                 .iter()
                 .map(|(ra, rb)| (ra[j] - rb[j]).abs())
                 .fold(0.0, f64::max);
-            (cols[j].clone(), if scale > 0.0 { diff / scale } else { diff })
+            (
+                cols[j].clone(),
+                if scale > 0.0 { diff / scale } else { diff },
+            )
         })
         .collect()
 }
@@ -215,7 +260,10 @@ fn anm_vs_ida(name: &str, before_stop: f64) {
         &format!("{name}: ANM vs IDA (rtol {RTOL:e}), t <= {t_max}"),
         &errs,
     );
-    let bad: Vec<_> = errs.iter().filter(|(_, e)| !(*e <= 1e-6)).collect();
+    let bad: Vec<_> = errs
+        .iter()
+        .filter(|(_, e)| e.is_nan() || *e > 1e-6)
+        .collect();
     assert!(bad.is_empty(), "{name}: columns above 1e-6: {bad:?}");
 }
 
@@ -267,10 +315,7 @@ fn roller_breakdown_window() {
         .collect();
     let stride = (near.len() / 40).max(1);
     for s in near.iter().step_by(stride) {
-        println!(
-            "  {:.9} {:.3e} {:+.6e} {}",
-            s.t, s.h, s.slip, s.order
-        );
+        println!("  {:.9} {:.3e} {:+.6e} {}", s.t, s.h, s.slip, s.order);
     }
     println!(
         "IDA stop: {} at t = {:.9} ({:?})",

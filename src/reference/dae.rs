@@ -19,7 +19,7 @@ impl Dense<'_> {
 /// An implicit DAE of index 1 for IDA.
 pub trait Dae {
     /// Number of unknowns.
-    fn len(&self) -> usize;
+    fn dim(&self) -> usize;
     /// For each unknown: true if differential (y' appears), false if algebraic.
     fn differential(&self) -> Vec<bool>;
     /// r = F(t, y, y').
@@ -49,7 +49,7 @@ pub trait FrictionDae: Dae {
 /// Finite-difference check of [`Dae::jacobian`]: the largest
 /// |J_an - J_fd| / max(1, |J_fd|) over all entries (central differences).
 pub fn jacobian_error(dae: &dyn Dae, t: f64, cj: f64, y: &[f64], yp: &[f64]) -> f64 {
-    let n = dae.len();
+    let n = dae.dim();
     let mut data = vec![0.0; n * n];
     dae.jacobian(t, cj, y, yp, &mut Dense { n, data: &mut data });
     let mut worst: f64 = 0.0;

@@ -19,7 +19,7 @@ pub struct Friction1d {
 }
 
 impl Dae for Friction1d {
-    fn len(&self) -> usize {
+    fn dim(&self) -> usize {
         2
     }
     fn differential(&self) -> Vec<bool> {

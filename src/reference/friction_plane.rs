@@ -32,7 +32,7 @@ pub struct FrictionPlane {
 }
 
 impl Dae for FrictionPlane {
-    fn len(&self) -> usize {
+    fn dim(&self) -> usize {
         6
     }
     fn differential(&self) -> Vec<bool> {

@@ -80,7 +80,7 @@ fn dot(a: [f64; 2], b: [f64; 2]) -> f64 {
 }
 
 impl Dae for FrictionRoller {
-    fn len(&self) -> usize {
+    fn dim(&self) -> usize {
         6
     }
     fn differential(&self) -> Vec<bool> {
@@ -104,6 +104,8 @@ impl Dae for FrictionRoller {
         r[4] = gr * rn_rate + gh * vn + self.alpha * c.residual(rn, fr.h);
         r[5] = rt + self.law.f * nreg * g;
     }
+    // Index loops mirror the component formulas (rows x, y; columns u_x, u_y).
+    #[allow(clippy::needless_range_loop)]
     fn jacobian(&self, _t: f64, cj: f64, y: &[f64], _yp: &[f64], j: &mut Dense) {
         let [ux, uy, vx, vy, rn, rt] = [y[0], y[1], y[2], y[3], y[4], y[5]];
         let (k, f) = (self.k, self.load_rate);
@@ -142,7 +144,11 @@ impl Dae for FrictionRoller {
                 col,
                 a * n[col] + gr * da_du + gh * dvn_du + self.alpha * gh * n[col],
             );
-            j.add(4, 2 + col, gr * (k * n[col] + rt * t[col] / rho) + gh * n[col]);
+            j.add(
+                4,
+                2 + col,
+                gr * (k * n[col] + rt * t[col] / rho) + gh * n[col],
+            );
         }
         j.add(4, 4, 2.0 / c.k * a + vn + self.alpha * gr);
         j.add(4, 5, gr * vt / rho);

@@ -196,7 +196,7 @@ impl<'a> Ida<'a> {
         rtol: f64,
         atol: f64,
     ) -> Result<Self, IdaError> {
-        let n = dae.len();
+        let n = dae.dim();
         if y0.len() != n || yp0.len() != n {
             return Err(IdaError::Input(format!(
                 "initial vectors have lengths {} and {}, the DAE has {n} unknowns",
@@ -254,7 +254,10 @@ impl<'a> Ida<'a> {
                 *dst = if d { 1.0 } else { 0.0 };
             }
             ida.mem = non_null("IDACreate", sys::IDACreate(ctx))?;
-            ida.check("IDAInit", sys::IDAInit(ida.mem, Some(residual_cb), t0, ida.y, ida.yp))?;
+            ida.check(
+                "IDAInit",
+                sys::IDAInit(ida.mem, Some(residual_cb), t0, ida.y, ida.yp),
+            )?;
             ida.check("IDASStolerances", sys::IDASStolerances(ida.mem, rtol, atol))?;
             let user = &*ida.callback as *const Callback as *mut c_void;
             let rc = sys::IDASetUserData(ida.mem, user);

@@ -97,7 +97,10 @@ mod tests {
             let e = 1e-6;
             let fd = (fr.shape(w + e).0 - fr.shape(w - e).0) / (2.0 * e);
             let an = fr.shape(w).1;
-            assert!((fd - an).abs() <= 1e-6 * an.abs().max(1.0), "{w}: {fd} {an}");
+            assert!(
+                (fd - an).abs() <= 1e-6 * an.abs().max(1.0),
+                "{w}: {fd} {an}"
+            );
         }
         for rn in [-1.0, 0.0, 0.3] {
             let e = 1e-7;

@@ -54,7 +54,11 @@ pub fn write(run: &IdaRun, dir: &Path) -> Result<()> {
         .iter()
         .map(|s| vec![s.t, s.h, s.slip, s.order as f64])
         .collect();
-    write_csv(&dir.join("ida_steps.csv"), &["t", "h", "slip", "order"], &rows)?;
+    write_csv(
+        &dir.join("ida_steps.csv"),
+        &["t", "h", "slip", "order"],
+        &rows,
+    )?;
     let summary = Summary {
         tool: "SUNDIALS IDA",
         version: &run.version,

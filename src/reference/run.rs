@@ -94,9 +94,9 @@ impl IdaRun {
         let t1 = self
             .crossings
             .iter()
-            .filter(|c| c.level < 10.0 * self.vc * (1.0 - 1e-12) && c.t <= t10)
-            .map(|c| c.t)
-            .last()?;
+            .rev()
+            .find(|c| c.level < 10.0 * self.vc * (1.0 - 1e-12) && c.t <= t10)
+            .map(|c| c.t)?;
         Some((t1, t10))
     }
 }
@@ -110,7 +110,9 @@ pub fn model(scene: &FrictionScene) -> Result<Box<dyn FrictionDae>, IdaError> {
             .contact
             .as_ref()
             .map(Contact::from_law)
-            .ok_or_else(|| IdaError::Input(format!("{} scene without a contact law", scene.kind.name())))
+            .ok_or_else(|| {
+                IdaError::Input(format!("{} scene without a contact law", scene.kind.name()))
+            })
     };
     Ok(match (scene.kind, scene.obstacle) {
         (Kind::Friction1d, Obstacle::Plane { v }) => Box::new(Friction1d {
@@ -148,6 +150,10 @@ pub fn model(scene: &FrictionScene) -> Result<Box<dyn FrictionDae>, IdaError> {
 /// Internal steps allowed per IDASolve call (one call per step here, so this
 /// only bounds the steps between stop-time returns).
 const MAX_STEPS: i64 = 10_000_000;
+/// Step-collapse diagnosis: this many consecutive steps with
+/// h <= COLLAPSE_H max(|t|, t_end).
+const COLLAPSE_STEPS: usize = 1000;
+const COLLAPSE_H: f64 = 1e-13;
 /// Internal steps allowed in a whole run.
 const MAX_TOTAL_STEPS: usize = 2_000_000;
 
@@ -190,6 +196,7 @@ pub fn solve_model(
         t: t_end,
         message: None,
     };
+    let mut tiny = 0;
     let result: Result<(), IdaError> = (|| {
         while ida.t() < t_end {
             if steps.len() >= MAX_TOTAL_STEPS {
@@ -207,12 +214,31 @@ pub fn solve_model(
             let t = ida.solve(t_end, Task::OneStep)?;
             let y = ida.y().to_vec();
             let slip = dae.slip(t, &y);
+            let h = ida.last_step();
             steps.push(StepRecord {
                 t,
-                h: ida.last_step(),
+                h,
                 slip,
                 order: ida.last_order(),
             });
+            // A step size at round-off level for many steps in a row: IDA
+            // cannot advance (it would only stop at max_steps).
+            if h <= COLLAPSE_H * t.abs().max(t_end) {
+                tiny += 1;
+            } else {
+                tiny = 0;
+            }
+            if tiny >= COLLAPSE_STEPS {
+                stop = IdaStop {
+                    reason: "step_collapse".into(),
+                    t,
+                    message: Some(format!(
+                        "IDA's step size collapsed: {COLLAPSE_STEPS} steps in a row below {COLLAPSE_H:e} t_end, last h = {h:.3e} s at t = {t:.12e} s, slip speed {slip:.6e} m/s (BDF order {})",
+                        ida.last_order()
+                    )),
+                };
+                return Ok(());
+            }
             drift = drift.max(dae.constraint_drift(t, &y).abs());
             // Output rows within this step, from IDA's interpolant.
             let t_prev = prev.0;
