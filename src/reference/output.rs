@@ -31,7 +31,8 @@ struct Summary<'a> {
     /// [t(|v_s| = Vc), t(|v_s| = 10 Vc)].
     #[serde(skip_serializing_if = "Option::is_none")]
     surge_window: Option<(f64, f64)>,
-    /// Smallest internal step and where (the collapse, if any).
+    /// Smallest internal step after the start-up (t >= 1% of the end time)
+    /// and where: where the step size collapses, if it does.
     #[serde(skip_serializing_if = "Option::is_none")]
     min_step: Option<MinStep>,
     max_constraint_drift: f64,
@@ -76,7 +77,7 @@ pub fn write(run: &IdaRun, dir: &Path) -> Result<()> {
         yp0: &run.yp0,
         slip_crossings: &run.crossings,
         surge_window: run.surge_window(),
-        min_step: run.min_step_after(0.0).map(|s| MinStep {
+        min_step: run.min_step_after(0.01 * run.stop.t).map(|s| MinStep {
             t: s.t,
             h: s.h,
             slip: s.slip,
