@@ -23,6 +23,8 @@ pub mod linalg;
 pub mod mesh;
 pub mod model;
 pub mod output;
+#[cfg(feature = "reference")]
+pub mod reference;
 pub mod scene;
 pub mod series;
 pub mod shell;

@@ -64,6 +64,12 @@ enum Command {
         #[arg(short, long, value_name = "DIR")]
         out: PathBuf,
     },
+    /// Solve a scene with an external reference solver.
+    #[cfg(feature = "reference")]
+    Reference {
+        #[command(subcommand)]
+        solver: ReferenceSolver,
+    },
     /// Stability stress matrix on the friction scenes: every run must meet its
     /// accuracy check or stop with a diagnosis (stress.md, stress.csv).
     Stress {
@@ -75,6 +81,24 @@ enum Command {
         max_steps: usize,
         #[arg(short, long, value_name = "DIR")]
         out: PathBuf,
+    },
+}
+
+#[cfg(feature = "reference")]
+#[derive(Subcommand)]
+enum ReferenceSolver {
+    /// SUNDIALS IDA on a friction scene's DAE: writes history.csv, ida_steps.csv,
+    /// summary.json and ida_steps.svg into DIR.
+    Ida {
+        scene: PathBuf,
+        #[arg(short, long, value_name = "DIR")]
+        out: PathBuf,
+        /// Relative tolerance.
+        #[arg(long, default_value_t = 1e-10)]
+        rtol: f64,
+        /// Absolute tolerance.
+        #[arg(long, default_value_t = 1e-10)]
+        atol: f64,
     },
 }
 
@@ -95,6 +119,52 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
             let (kind, _) = load(&scene)?;
             println!("{}: valid `{}` scene", scene.display(), kind.name());
             Ok(ExitCode::SUCCESS)
+        }
+        #[cfg(feature = "reference")]
+        Command::Reference {
+            solver:
+                ReferenceSolver::Ida {
+                    scene,
+                    out,
+                    rtol,
+                    atol,
+                },
+        } => {
+            let (kind, friction) = load(&scene)?;
+            let Some(sc) = friction else {
+                anyhow::bail!(
+                    "{}: IDA solves the friction scenes only, not `{}`",
+                    scene.display(),
+                    kind.name()
+                );
+            };
+            let run = anm::reference::solve(&sc, rtol, atol)
+                .with_context(|| format!("IDA on {}", scene.display()))?;
+            anm::reference::output::write(&run, &out)?;
+            let c = &run.counters;
+            println!(
+                "{}: SUNDIALS IDA {}: stop = {} at t = {:.9} s; {} steps, {} residual evals, {} Jacobian evals, {} linear setups, {:.3} s; outputs in {}",
+                scene.display(),
+                run.version,
+                run.stop.reason,
+                run.stop.t,
+                c.steps,
+                c.residual_evals,
+                c.jacobian_evals,
+                c.linear_setups,
+                run.wall_s,
+                out.display()
+            );
+            if let Some(m) = &run.stop.message {
+                println!("  {m}");
+            }
+            if let Some((t1, t10)) = run.surge_window() {
+                println!("  |slip| rises from Vc to 10 Vc over [{t1:.9}, {t10:.9}] s");
+            }
+            Ok(match run.stop.reason.as_str() {
+                "end" => ExitCode::SUCCESS,
+                _ => ExitCode::from(2),
+            })
         }
         Command::Audit {
             scene,
