@@ -137,4 +137,3 @@ fn series_terms_match_the_residual_along_the_series() {
         assert!(w[1].1 <= 2.0 * w[0].1, "order {}: residual grew: {:?}", w[1].0, w);
     }
 }
-}
