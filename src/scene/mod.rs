@@ -1,1 +1,207 @@
-//! TOML scene files (serde, deny_unknown_fields), validated into models.
+//! TOML scene files (serde, `deny_unknown_fields`), validated into models.
+//!
+//! Every scene starts with `[scene] kind = "..."`; the kind selects the typed
+//! schema. Errors name the file, the key (`table.key`) and the problem.
+
+pub mod friction;
+
+use crate::error::{Error, Result};
+use std::path::{Path, PathBuf};
+
+/// The kinds of scene `anm` knows.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Kind {
+    Friction1d,
+    FrictionPlane,
+    FrictionRoller,
+    PlateCylinder,
+}
+
+impl Kind {
+    pub const ALL: [(&'static str, Kind); 4] = [
+        ("friction-1d", Kind::Friction1d),
+        ("friction-plane", Kind::FrictionPlane),
+        ("friction-roller", Kind::FrictionRoller),
+        ("plate-cylinder", Kind::PlateCylinder),
+    ];
+
+    pub fn name(self) -> &'static str {
+        Self::ALL
+            .iter()
+            .find(|(_, k)| *k == self)
+            .map(|(n, _)| *n)
+            .unwrap_or("?")
+    }
+}
+
+/// Reads a scene file's text.
+pub fn read(path: &Path) -> Result<String> {
+    std::fs::read_to_string(path).map_err(|source| Error::Io {
+        file: path.to_path_buf(),
+        source,
+    })
+}
+
+/// The `[scene] kind` of a scene file.
+pub fn kind(path: &Path, text: &str) -> Result<Kind> {
+    let value: toml::Table = toml::from_str(text).map_err(|e| parse_error(path, text, e))?;
+    let invalid = |problem: String| Error::Invalid {
+        file: path.to_path_buf(),
+        key: "scene.kind".into(),
+        problem,
+    };
+    let kind = value
+        .get("scene")
+        .and_then(|s| s.get("kind"))
+        .ok_or_else(|| invalid("missing: every scene needs `[scene] kind = \"...\"`".into()))?;
+    let name = kind
+        .as_str()
+        .ok_or_else(|| invalid(format!("expected a string, found {kind}")))?;
+    Kind::ALL
+        .iter()
+        .find(|(n, _)| *n == name)
+        .map(|(_, k)| *k)
+        .ok_or_else(|| {
+            let known: Vec<&str> = Kind::ALL.iter().map(|(n, _)| *n).collect();
+            invalid(format!(
+                "unknown kind `{name}` (known: {})",
+                known.join(", ")
+            ))
+        })
+}
+
+/// Deserializes `text` into `T`, turning serde/TOML errors into an error that
+/// names the file, the line and the `table.key` involved.
+pub fn parse<T: serde::de::DeserializeOwned>(path: &Path, text: &str) -> Result<T> {
+    toml::from_str(text).map_err(|e| parse_error(path, text, e))
+}
+
+fn parse_error(path: &Path, text: &str, e: toml::de::Error) -> Error {
+    let message = e.message().trim().to_string();
+    let Some(span) = e.span() else {
+        return Error::Parse {
+            file: path.to_path_buf(),
+            message,
+        };
+    };
+    let line_no = text[..span.start.min(text.len())].matches('\n').count() + 1;
+    let key = key_at(text, span.start);
+    Error::Parse {
+        file: path.to_path_buf(),
+        message: match key {
+            Some(k) => format!("line {line_no}: key `{k}`: {message}"),
+            None => format!("line {line_no}: {message}"),
+        },
+    }
+}
+
+/// The dotted key (`table.key`) whose line contains byte offset `at`.
+fn key_at(text: &str, at: usize) -> Option<String> {
+    let mut table = String::new();
+    let mut offset = 0;
+    for line in text.split_inclusive('\n') {
+        let trimmed = line.trim();
+        if trimmed.starts_with('[') {
+            table = trimmed
+                .trim_matches(|c| c == '[' || c == ']')
+                .trim()
+                .to_string();
+        }
+        if at < offset + line.len() {
+            if trimmed.starts_with('[') {
+                return Some(table);
+            }
+            let key = trimmed.split('=').next()?.trim();
+            if key.is_empty() || trimmed.starts_with('#') {
+                return None;
+            }
+            return Some(if table.is_empty() {
+                key.to_string()
+            } else {
+                format!("{table}.{key}")
+            });
+        }
+        offset += line.len();
+    }
+    None
+}
+
+/// Resolves a path written in a scene relative to the scene file's folder.
+pub fn relative_to(scene: &Path, file: &str) -> PathBuf {
+    let p = Path::new(file);
+    if p.is_absolute() {
+        p.to_path_buf()
+    } else {
+        scene.parent().unwrap_or(Path::new(".")).join(p)
+    }
+}
+
+/// Validation helper: a failed check becomes `Error::Invalid` naming the key.
+pub struct Checker<'a> {
+    pub file: &'a Path,
+}
+
+impl Checker<'_> {
+    pub fn fail(&self, key: &str, problem: impl Into<String>) -> Error {
+        Error::Invalid {
+            file: self.file.to_path_buf(),
+            key: key.into(),
+            problem: problem.into(),
+        }
+    }
+
+    pub fn finite(&self, key: &str, v: f64) -> Result<f64> {
+        if v.is_finite() {
+            Ok(v)
+        } else {
+            Err(self.fail(key, format!("must be a finite number, got {v}")))
+        }
+    }
+
+    pub fn positive(&self, key: &str, v: f64) -> Result<f64> {
+        self.finite(key, v)?;
+        if v > 0.0 {
+            Ok(v)
+        } else {
+            Err(self.fail(key, format!("must be > 0, got {v}")))
+        }
+    }
+
+    pub fn non_negative(&self, key: &str, v: f64) -> Result<f64> {
+        self.finite(key, v)?;
+        if v >= 0.0 {
+            Ok(v)
+        } else {
+            Err(self.fail(key, format!("must be >= 0, got {v}")))
+        }
+    }
+
+    pub fn within(&self, key: &str, v: f64, lo: f64, hi: f64) -> Result<f64> {
+        self.finite(key, v)?;
+        if (lo..=hi).contains(&v) {
+            Ok(v)
+        } else {
+            Err(self.fail(key, format!("must lie in [{lo}, {hi}], got {v}")))
+        }
+    }
+
+    /// A key that this kind of scene does not use must be absent.
+    pub fn unused<T>(&self, key: &str, v: &Option<T>, kind: Kind) -> Result<()> {
+        match v {
+            Some(_) => Err(self.fail(
+                key,
+                format!("not used by a `{}` scene; remove it", kind.name()),
+            )),
+            None => Ok(()),
+        }
+    }
+
+    pub fn required<T: Copy>(&self, key: &str, v: Option<T>, kind: Kind) -> Result<T> {
+        v.ok_or_else(|| {
+            self.fail(
+                key,
+                format!("missing: required by a `{}` scene", kind.name()),
+            )
+        })
+    }
+}

@@ -297,13 +297,12 @@ fn series_step<P: ContinuationProblem>(
         u_end: vec![],
         lambda_end: 0.0,
     };
-    if cfg.pade {
-        if let Some(a) = pade::range(&terms, n_ord, cfg.eps, a_poly, cap.min(10.0 * a_poly)) {
-            if a > a_poly {
-                step.pade = pade::Pade::new(&terms, n_ord);
-                step.length = a;
-            }
-        }
+    if cfg.pade
+        && let Some(a) = pade::range(&terms, n_ord, cfg.eps, a_poly, cap.min(10.0 * a_poly))
+        && a > a_poly
+    {
+        step.pade = pade::Pade::new(&terms, n_ord);
+        step.length = a;
     }
     if step.length < cfg.min_step {
         return Err(Error::StepCollapse {
@@ -315,10 +314,10 @@ fn series_step<P: ContinuationProblem>(
     }
     // Do not overshoot the target load.
     let (_, l_end) = step.eval(step.length);
-    if (l_end - cfg.lambda_end) * forward > 0.0 {
-        if let Some(a) = step.a_at_lambda(cfg.lambda_end) {
-            step.length = a;
-        }
+    if (l_end - cfg.lambda_end) * forward > 0.0
+        && let Some(a) = step.a_at_lambda(cfg.lambda_end)
+    {
+        step.length = a;
     }
     let (mut u_end, mut l_end) = step.eval(step.length);
     if (l_end - cfg.lambda_end) * forward > 0.0 && (l_end - cfg.lambda_end).abs() < 1e-9 {
@@ -334,6 +333,10 @@ fn series_step<P: ContinuationProblem>(
     step.end_residual = norm(&r) / scale;
     let mut res = step.end_residual;
     let mut it = 0;
+    // Start with the step's factorization (modified Newton); when it does not
+    // contract by at least 10x per iteration, refactorize at the current point
+    // (full Newton). Both keep the arclength constraint <dU, U1> + dl l1 = 0.
+    let mut current: Option<(Factorization, Vec<f64>, f64)> = None;
     while res > cfg.residual_tol {
         if !cfg.correct || it >= cfg.max_corrections {
             return Err(Error::NoConvergence {
@@ -345,9 +348,18 @@ fn series_step<P: ContinuationProblem>(
                 tolerance: cfg.residual_tol,
             });
         }
-        let ub = solve(&r, stats, "correction")?;
-        let dl = -dot(&ub, &step.u[1]) / denom;
-        for ((x, b), t) in u_end.iter_mut().zip(&ub).zip(&ut) {
+        let (ub, ut_c, den) = match &current {
+            None => (solve(&r, stats, "correction")?, ut.clone(), denom),
+            Some((f, ut_c, den)) => {
+                let t = Instant::now();
+                let x: Vec<f64> = f.solve(&r.iter().map(|x| -x).collect::<Vec<_>>());
+                stats.solves += 1;
+                charge(&mut stats.solve_s, t);
+                (x, ut_c.clone(), *den)
+            }
+        };
+        let dl = -dot(&ub, &step.u[1]) / den;
+        for ((x, b), t) in u_end.iter_mut().zip(&ub).zip(&ut_c) {
             *x += b + dl * t;
         }
         l_end += dl;
@@ -355,9 +367,28 @@ fn series_step<P: ContinuationProblem>(
         r = problem.residual(&u_end, l_end)?;
         stats.residual_evaluations += 1;
         charge(&mut stats.assembly_s, t);
-        res = norm(&r) / scale;
+        let new_res = norm(&r) / scale;
         it += 1;
         stats.corrections += 1;
+        if new_res > 0.1 * res && new_res > cfg.residual_tol {
+            let t = Instant::now();
+            let (k, rl) = problem.tangent(&u_end, l_end)?;
+            charge(&mut stats.assembly_s, t);
+            let t = Instant::now();
+            let f = lu.factorize(&k).map_err(|detail| Error::SingularMatrix {
+                step: index,
+                param: "lambda",
+                at: l_end,
+                detail,
+            })?;
+            stats.factorizations += 1;
+            charge(&mut stats.factorization_s, t);
+            let ut_c: Vec<f64> = f.solve(&rl.iter().map(|x| -x).collect::<Vec<_>>());
+            stats.solves += 1;
+            let den = dot(&ut_c, &step.u[1]) + step.lambda[1];
+            current = Some((f, ut_c, den));
+        }
+        res = new_res;
     }
     if !u_end.iter().all(|x| x.is_finite()) || !l_end.is_finite() {
         return Err(Error::NonFinite {

@@ -62,6 +62,9 @@ pub struct DaeConfig {
     /// A step shorter than this means the solution ceased to be smooth: the
     /// run stops with reason "singularity".
     pub min_step: f64,
+    /// Stop at the first singular point the series reveals (geometric-series
+    /// test); otherwise record it as an event and go on with the step.
+    pub stop_at_singularity: bool,
 }
 
 /// One accepted time step.
@@ -74,6 +77,9 @@ pub struct TimeStep {
     pub series: Vec<Vec<f64>>,
     /// |F| at the step end before correction.
     pub end_residual: f64,
+    /// Distance to a singularity when the last terms form a geometric
+    /// series (Cochelin-Medale test on (u, v, z)).
+    pub geometric: Option<f64>,
 }
 
 impl TimeStep {
@@ -92,15 +98,20 @@ pub struct DaeResult {
     pub stats: Stats,
     /// "end", "singularity", "max_steps" or an error kind.
     pub stop: String,
-    /// Time of the stop (for a singularity: where the steps collapsed).
+    /// Time of the stop: for a singularity, the start of the step whose
+    /// series revealed it (the last regular point).
     pub t: f64,
+    /// Located singular point: t0 + alpha_1 from the geometric-series test.
+    pub t_singular: Option<f64>,
+    /// Every step whose series was geometric: (t0, located singular point).
+    pub events: Vec<(f64, f64)>,
     pub error: Option<Error>,
     /// Initial (v, z) actually used and |F| there.
     pub initial_residual: f64,
 }
 
 /// The tape of a problem: inputs u, v, z, t in that order.
-pub fn record_tape<P: DaeProblem>(problem: &P, order: usize) -> Tape {
+pub fn record_tape<P: DaeProblem + ?Sized>(problem: &P, order: usize) -> Tape {
     let b = TapeBuilder::new();
     let (nd, na) = (problem.n_diff(), problem.n_alg());
     let u = b.inputs(nd);
@@ -116,7 +127,7 @@ pub fn record_tape<P: DaeProblem>(problem: &P, order: usize) -> Tape {
     b.finish(&f, order)
 }
 
-struct Engine<'p, P: DaeProblem> {
+struct Engine<'p, P: DaeProblem + ?Sized> {
     problem: &'p P,
     tape: Tape,
     nd: usize,
@@ -124,7 +135,7 @@ struct Engine<'p, P: DaeProblem> {
     stats: Stats,
 }
 
-impl<P: DaeProblem> Engine<'_, P> {
+impl<P: DaeProblem + ?Sized> Engine<'_, P> {
     fn n(&self) -> usize {
         self.nd + self.na
     }
@@ -233,7 +244,7 @@ impl<P: DaeProblem> Engine<'_, P> {
 
 /// Integrates from u0 at cfg.t0 to cfg.t_end. `on_step` receives every
 /// accepted step (for outputs) and may stop the run with an error.
-pub fn run<P: DaeProblem>(
+pub fn run<P: DaeProblem + ?Sized>(
     problem: &P,
     u0: &[f64],
     init: &Initialization,
@@ -256,6 +267,8 @@ pub fn run<P: DaeProblem>(
             .map(|e| e.kind().to_string())
             .unwrap_or_else(|| stop.to_string()),
         t,
+        t_singular: None,
+        events: Vec::new(),
         error,
         initial_residual: r0,
     };
@@ -273,13 +286,30 @@ pub fn run<P: DaeProblem>(
     } else {
         norm(&eng.eval0(&u, &vz, t))
     };
-    let n_ord = cfg.order;
+    let mut events = Vec::new();
+    let finish_with_events = |mut r: DaeResult, events: Vec<(f64, f64)>| {
+        r.events = events;
+        r
+    };
     for index in 0..cfg.max_steps {
         if t >= cfg.t_end {
-            return finish(eng.stats, "end", t, None, r0);
+            return finish_with_events(finish(eng.stats, "end", t, None, r0), events);
         }
         match time_step(&mut eng, &u, &vz, t, index, cfg) {
+            Ok(step) if step.geometric.is_some() && cfg.stop_at_singularity => {
+                // The last terms form a geometric series: a singular point
+                // lies at t0 + alpha_1, within reach of this step. Stop at the
+                // last regular point and report where the singularity is.
+                let t_star = t + step.geometric.unwrap_or(0.0);
+                events.push((t, t_star));
+                let mut r = finish(eng.stats, "singularity", t, None, r0);
+                r.t_singular = Some(t_star);
+                return finish_with_events(r, events);
+            }
             Ok(step) => {
+                if let Some(d) = step.geometric {
+                    events.push((t, t + d));
+                }
                 eng.stats.steps += 1;
                 let y = step.eval(step.t0 + step.length);
                 if y.iter().any(|x| !x.is_finite()) {
@@ -313,12 +343,11 @@ pub fn run<P: DaeProblem>(
             }
             Err(e) => return finish(eng.stats, "", t, Some(e), r0),
         }
-        let _ = n_ord;
     }
     finish(eng.stats, "max_steps", t, None, r0)
 }
 
-fn time_step<P: DaeProblem>(
+fn time_step<P: DaeProblem + ?Sized>(
     eng: &mut Engine<P>,
     u0: &[f64],
     vz0: &[f64],
@@ -385,6 +414,8 @@ fn time_step<P: DaeProblem>(
             length: a_max,
         });
     }
+    let terms: Vec<Vec<f64>> = (0..=n_ord).map(term).collect();
+    let geometric = super::geometric::detect(&terms).map(|g| g.distance);
     let length = a_max.min(cfg.t_end - t0);
     let mut step = TimeStep {
         index,
@@ -392,6 +423,7 @@ fn time_step<P: DaeProblem>(
         length,
         series,
         end_residual: 0.0,
+        geometric,
     };
     let y = step.eval(t0 + length);
     let f = eng.eval0(&y[..nd], &y[nd..], t0 + length);

@@ -56,7 +56,7 @@ mod tests {
     #[test]
     fn detects_pure_geometric_series_and_rejects_polynomial_decay() {
         // U_p = v / 0.3^p has its pole at a = 0.3.
-        let v = vec![1.0, -2.0, 0.5];
+        let v = [1.0, -2.0, 0.5];
         let terms: Vec<Vec<f64>> = (0..=15)
             .map(|p| v.iter().map(|x| x / 0.3f64.powi(p)).collect())
             .collect();

@@ -12,7 +12,12 @@
 
 use crate::linalg::{dot, norm};
 
-/// Common-denominator Padé approximant built from `terms[1..=n]`.
+/// Relative size below which an orthogonalized term counts as dependent on
+/// the previous ones (its denominator coefficients would be noise).
+const DEPENDENT: f64 = 1e-9;
+
+/// Common-denominator Padé approximant built from `terms[1..=n]` (fewer when
+/// the last terms are numerically dependent; see [`Pade::terms_used`]).
 #[derive(Clone, Debug)]
 pub struct Pade {
     /// d_1..d_{n-1}.
@@ -20,8 +25,9 @@ pub struct Pade {
 }
 
 impl Pade {
-    /// Returns `None` when the terms are numerically dependent (the
-    /// approximant is then meaningless and the polynomial should be used).
+    /// Uses the longest prefix W_1..W_n' (n' <= n) whose first n' - 1 terms are
+    /// numerically independent; returns `None` when fewer than 3 terms remain
+    /// (the polynomial should then be used).
     pub fn new(terms: &[Vec<f64>], n: usize) -> Option<Self> {
         if n < 3 {
             return None;
@@ -46,8 +52,15 @@ impl Pade {
             }
             if k <= m {
                 let nk = norm(&w);
-                if !(nk > 1e-13 * norm(&terms[k])) {
-                    return None;
+                if !(nk > DEPENDENT * norm(&terms[k])) {
+                    // W_k is (numerically) in the span of W_1..W_{k-1}: build
+                    // the approximant from W_1..W_k instead, whose W_k is
+                    // then exactly represented by the basis.
+                    return if k >= 3 && k < n {
+                        Self::new(terms, k)
+                    } else {
+                        None
+                    };
                 }
                 alpha[k - 1][k - 1] = nk;
                 basis.push(w.iter().map(|x| x / nk).collect());
@@ -67,6 +80,11 @@ impl Pade {
         } else {
             None
         }
+    }
+
+    /// Number n' of series terms the approximant is built from.
+    pub fn terms_used(&self) -> usize {
+        self.d.len() + 1
     }
 
     /// D_j(a) for j = 0..=n-1.
@@ -133,7 +151,7 @@ impl Pade {
 /// Returns `None` when Padé cannot be built.
 pub fn range(terms: &[Vec<f64>], n: usize, eps: f64, a_poly: f64, a_cap: f64) -> Option<f64> {
     let pn = Pade::new(terms, n)?;
-    let pm = Pade::new(terms, n - 1)?;
+    let pm = Pade::new(terms, pn.terms_used() - 1)?;
     let mut hi = a_cap;
     for p in [&pn, &pm] {
         if let Some(pole) = p.pole(a_cap) {

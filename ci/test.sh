@@ -1,0 +1,16 @@
+#!/usr/bin/env bash
+# The README's test command. Installs what the tests need (Debian packages for
+# the `reference` feature: SUNDIALS is built from the sundials-sys crate's own
+# sources with cmake, HDF5 comes from Debian), then runs the default-feature
+# tests and the reference tests. Works on a fresh Debian 12 machine with Rust.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+if [ -f ci/install-reference.sh ]; then
+  bash ci/install-reference.sh
+fi
+
+echo "== cargo test (default features)"
+cargo test --locked
+echo "== cargo test --features reference"
+cargo test --locked --features reference

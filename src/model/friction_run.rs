@@ -1,0 +1,367 @@
+//! Runs a friction scene with the Taylor DAE engine and writes its outputs:
+//! history.csv on the scene's uniform time grid (evaluated from the series,
+//! not interpolated), steps.csv at the step ends, summary.json, history.svg.
+
+use super::friction::{FrictionModel, build};
+use crate::error::Result;
+use crate::output::plot::{Curve, Panel, draw};
+use crate::output::{Stop, create_dir, write_csv, write_json};
+use crate::scene::friction::{FrictionScene, InitMode};
+use crate::series::dae::{self, DaeConfig, Initialization};
+use crate::series::{Stats, taylor};
+use serde::Serialize;
+use std::path::Path;
+use std::time::Instant;
+
+/// Everything a friction run produced.
+#[derive(Debug)]
+pub struct FrictionRun {
+    pub scene: String,
+    pub kind: String,
+    pub columns: Vec<String>,
+    /// Rows on the output grid (up to the stop).
+    pub history: Vec<Vec<f64>>,
+    /// Step ends: step, t, h (length), end residual, slip velocity,
+    /// geometric-series distance (0: none), then the history columns.
+    pub steps: Vec<Vec<f64>>,
+    pub order: usize,
+    pub eps: f64,
+    pub init: String,
+    /// |F| at the initial point actually used.
+    pub initial_residual: f64,
+    pub stats: Stats,
+    pub wall_s: f64,
+    pub stop: Stop,
+    /// For a singular stop: the located singular point (geometric-series
+    /// test), or where the step lengths extrapolate to zero
+    /// (a_k ≈ c (t* - t_k) fitted on the last steps).
+    pub t_singular_estimate: Option<f64>,
+    /// Steps whose series revealed a singular point: (t0, located t*).
+    pub singular_events: Vec<(f64, f64)>,
+    /// The accepted steps' series (u, v, z), for checks and dense output.
+    pub series: Vec<crate::series::TimeStep>,
+}
+
+/// Solves the scene; writes the outputs into `out_dir` when given.
+pub fn run(scene: &FrictionScene, out_dir: Option<&Path>, progress: bool) -> Result<FrictionRun> {
+    let model = build(scene);
+    let model: &dyn FrictionModel = model.as_ref();
+    let start = Instant::now();
+    let init = match scene.init {
+        InitMode::Newton => {
+            let (mut v, z) = model.guess();
+            if let Some(v0) = scene.v0 {
+                v = model.exact_start(v0).0;
+            }
+            Initialization::Newton { v, z }
+        }
+        InitMode::Exact => {
+            let (v, z) = model.exact_start(scene.v0.expect("validated: exact mode has v0"));
+            Initialization::Exact { v, z }
+        }
+    };
+    let cfg = DaeConfig {
+        order: scene.order,
+        eps: scene.eps,
+        t0: 0.0,
+        t_end: scene.t_end,
+        max_steps: scene.max_steps,
+        newton_tol: scene.newton_tol,
+        correct: scene.correct,
+        residual_tol: scene.residual_tol,
+        min_step: scene.min_step,
+        stop_at_singularity: scene.stop_at_singularity,
+    };
+    let grid = scene.output_times();
+    let mut next = 0;
+    let mut history = Vec::with_capacity(grid.len());
+    let mut steps = Vec::new();
+    let mut series = Vec::new();
+    let bar = progress_bar(progress, scene.t_end);
+    let result = dae::run(model, &model.u0(), &init, &cfg, |step, stats| {
+        let t1 = step.t0 + step.length;
+        while next < grid.len() && grid[next] <= t1 + 1e-12 * scene.t_end {
+            let tg = grid[next];
+            history.push(model.row(tg, &step.eval(tg), &derivative(step, tg)));
+            next += 1;
+        }
+        let y = step.eval(t1);
+        let mut row = vec![
+            step.index as f64,
+            t1,
+            step.length,
+            step.end_residual,
+            model.slip(&y),
+            step.geometric.unwrap_or(0.0),
+        ];
+        row.extend(model.row(t1, &y, &derivative(step, t1)).into_iter().skip(1));
+        steps.push(row);
+        series.push(step.clone());
+        if let Some(b) = &bar {
+            b.set_position((1000.0 * t1 / scene.t_end) as u64);
+            b.set_message(format!(
+                "t = {t1:.4} s, step {}, h = {:.2e}",
+                stats.steps, step.length
+            ));
+        }
+        Ok(())
+    });
+    if let Some(b) = &bar {
+        b.finish_and_clear();
+    }
+    let wall_s = start.elapsed().as_secs_f64();
+    let t_singular_estimate = match result.stop.as_str() {
+        "singularity" => result
+            .t_singular
+            .or_else(|| extrapolate_singularity(&steps)),
+        _ => None,
+    };
+    let stop = Stop {
+        reason: result.stop.clone(),
+        t: Some(result.t),
+        lambda: None,
+        message: match (&result.error, result.stop.as_str()) {
+            (Some(e), _) => Some(e.to_string()),
+            (None, "singularity") => Some(match result.t_singular {
+                Some(ts) => format!(
+                    "at t = {:.9} s the series became geometric (Cochelin-Medale test): a singular point at t* = {ts:.9} s ends the smooth quasi-static solution",
+                    result.t
+                ),
+                None => format!(
+                    "the series step length fell below solver.min_step = {:.3e} s at t = {:.9} s: the solution stops being smooth there",
+                    scene.min_step, result.t
+                ),
+            }),
+            (None, "max_steps") => Some(format!(
+                "solver.max_steps = {} reached at t = {}",
+                scene.max_steps, result.t
+            )),
+            _ => None,
+        },
+    };
+    let run = FrictionRun {
+        scene: scene.file.display().to_string(),
+        kind: scene.kind.name().into(),
+        columns: model.columns().iter().map(|s| s.to_string()).collect(),
+        history,
+        steps,
+        order: scene.order,
+        eps: scene.eps,
+        init: format!("{:?}", scene.init).to_lowercase(),
+        initial_residual: result.initial_residual,
+        stats: result.stats,
+        wall_s,
+        stop,
+        t_singular_estimate,
+        singular_events: result.events.clone(),
+        series,
+    };
+    if let Some(dir) = out_dir {
+        write_outputs(&run, model, scene, dir)?;
+    }
+    Ok(run)
+}
+
+/// dy/dt of every series of the step at time t.
+fn derivative(step: &crate::series::TimeStep, t: f64) -> Vec<f64> {
+    step.series
+        .iter()
+        .map(|c| taylor::eval_derivative(c, t - step.t0))
+        .collect()
+}
+
+/// Fits a_k = c (t* - t_k) on the last five steps (least squares on a vs t)
+/// and returns t*, when the step lengths are indeed decreasing.
+fn extrapolate_singularity(steps: &[Vec<f64>]) -> Option<f64> {
+    let tail: Vec<(f64, f64)> = steps
+        .iter()
+        .rev()
+        .take(5)
+        .map(|r| (r[1] - r[2], r[2]))
+        .collect();
+    if tail.len() < 3 {
+        return None;
+    }
+    let n = tail.len() as f64;
+    let (st, sa) = tail
+        .iter()
+        .fold((0.0, 0.0), |(x, y), (t, a)| (x + t, y + a));
+    let (mt, ma) = (st / n, sa / n);
+    let (sxy, sxx) = tail.iter().fold((0.0, 0.0), |(xy, xx), (t, a)| {
+        (xy + (t - mt) * (a - ma), xx + (t - mt).powi(2))
+    });
+    let slope = sxy / sxx;
+    (slope < 0.0).then(|| mt - ma / slope)
+}
+
+fn progress_bar(show: bool, t_end: f64) -> Option<indicatif::ProgressBar> {
+    if !show {
+        return None;
+    }
+    let bar = indicatif::ProgressBar::new(1000);
+    let style = indicatif::ProgressStyle::with_template("{bar:40} {percent:>3}% {msg}")
+        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar());
+    bar.set_style(style);
+    bar.set_message(format!("t = 0 / {t_end} s"));
+    Some(bar)
+}
+
+fn write_outputs(
+    run: &FrictionRun,
+    model: &dyn FrictionModel,
+    scene: &FrictionScene,
+    dir: &Path,
+) -> Result<()> {
+    create_dir(dir)?;
+    let cols = model.columns();
+    write_csv(&dir.join("history.csv"), cols, &run.history)?;
+    let mut step_cols = vec![
+        "step",
+        "t",
+        "h",
+        "end_residual",
+        "slip",
+        "geometric_distance",
+    ];
+    step_cols.extend(cols.iter().skip(1));
+    write_csv(&dir.join("steps.csv"), &step_cols, &run.steps)?;
+    write_json(&dir.join("summary.json"), &Summary::from(run))?;
+    if scene.plot && !run.history.is_empty() {
+        plot(run, cols, &dir.join("history.svg"))?;
+    }
+    Ok(())
+}
+
+/// summary.json: the counters at the top level, then the run's settings.
+#[derive(Serialize)]
+struct Summary<'a> {
+    steps: usize,
+    factorizations: usize,
+    solves: usize,
+    wall_s: f64,
+    stop: &'a Stop,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    t_singular_estimate: Option<f64>,
+    /// (t0, t*) of every step whose series was geometric.
+    singular_events: &'a [(f64, f64)],
+    scene: &'a str,
+    kind: &'a str,
+    columns: &'a [String],
+    order: usize,
+    eps: f64,
+    init: &'a str,
+    initial_residual: f64,
+    output_rows: usize,
+    stats: &'a Stats,
+}
+
+impl<'a> From<&'a FrictionRun> for Summary<'a> {
+    fn from(run: &'a FrictionRun) -> Self {
+        Self {
+            steps: run.stats.steps,
+            factorizations: run.stats.factorizations,
+            solves: run.stats.solves,
+            wall_s: run.wall_s,
+            stop: &run.stop,
+            t_singular_estimate: run.t_singular_estimate,
+            singular_events: &run.singular_events,
+            scene: &run.scene,
+            kind: &run.kind,
+            columns: &run.columns,
+            order: run.order,
+            eps: run.eps,
+            init: &run.init,
+            initial_residual: run.initial_residual,
+            output_rows: run.history.len(),
+            stats: &run.stats,
+        }
+    }
+}
+
+fn plot(run: &FrictionRun, cols: &[&str], path: &Path) -> Result<()> {
+    let col = |name: &str| cols.iter().position(|c| *c == name);
+    let series = |name: &str| -> Vec<(f64, f64)> {
+        let j = col(name).expect("column exists");
+        run.history.iter().map(|r| (r[0], r[j])).collect()
+    };
+    let title = format!(
+        "{} — stop: {} at t = {:.4} s",
+        run.kind,
+        run.stop.reason,
+        run.stop.t.unwrap_or(f64::NAN)
+    );
+    let mut panels = Vec::new();
+    if col("u").is_some() {
+        panels.push(Panel {
+            title: &title,
+            x_label: "t (s)",
+            y_label: "u (m)",
+            curves: vec![Curve {
+                label: "u",
+                points: series("u"),
+            }],
+            log: (false, false),
+        });
+        panels.push(Panel {
+            title: "velocity and friction force",
+            x_label: "t (s)",
+            y_label: "v (m/s), R_T (N)",
+            curves: vec![
+                Curve {
+                    label: "v",
+                    points: series("v"),
+                },
+                Curve {
+                    label: "R_T",
+                    points: series("rt"),
+                },
+            ],
+            log: (false, false),
+        });
+    } else {
+        let traj: Vec<(f64, f64)> = run.history.iter().map(|r| (r[1], r[2])).collect();
+        panels.push(Panel {
+            title: &title,
+            x_label: "t (s)",
+            y_label: "u (m)",
+            curves: vec![
+                Curve {
+                    label: "u_x",
+                    points: series("ux"),
+                },
+                Curve {
+                    label: "u_y",
+                    points: series("uy"),
+                },
+            ],
+            log: (false, false),
+        });
+        panels.push(Panel {
+            title: "trajectory of the mass",
+            x_label: "u_x (m)",
+            y_label: "u_y (m)",
+            curves: vec![Curve {
+                label: "(u_x, u_y)",
+                points: traj,
+            }],
+            log: (false, false),
+        });
+        panels.push(Panel {
+            title: "contact reactions",
+            x_label: "t (s)",
+            y_label: "R (N)",
+            curves: vec![
+                Curve {
+                    label: "R_N",
+                    points: series("rn"),
+                },
+                Curve {
+                    label: "R_T",
+                    points: series("rt"),
+                },
+            ],
+            log: (false, false),
+        });
+    }
+    draw(path, &panels)
+}

@@ -1,0 +1,324 @@
+//! Newton-Raphson path following, the baseline the ANM is compared with
+//! (Abaqus-style incremental-iterative stepping; Crisfield, *Non-linear Finite
+//! Element Analysis of Solids and Structures*, vol. 1, 1991, §9.3).
+//!
+//! It uses the problem's own residual, tangent and linear solver (the same
+//! [`ContinuationProblem`] as the ANM), so a comparison measures the method,
+//! not the implementation. Each step: predictor along the last secant (the
+//! tangent on the first step), then full Newton corrections, each with a fresh
+//! tangent and factorization, on
+//!   load control:      R(U, lambda) = 0 with lambda fixed,
+//!   arclength control: R(U, lambda) = 0 and <U - U_p, t_U> + (lambda - lambda_p) t_l = 0
+//! (a hyperplane through the predictor, orthogonal to the prediction).
+//! The increment grows after fast convergence and is halved on failure. Steps
+//! are cut so that every requested lambda in `targets` is hit exactly.
+
+use super::continuation::ContinuationProblem;
+use super::stats::{Stats, charge};
+use crate::error::{Error, Result};
+use crate::linalg::{SparseLu, dot, norm};
+use std::time::Instant;
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Control {
+    Load,
+    Arclength,
+}
+
+#[derive(Clone, Debug)]
+pub struct NewtonConfig {
+    pub control: Control,
+    /// First increment: of lambda (load control) or of the arclength.
+    pub initial_step: f64,
+    pub max_step: f64,
+    pub min_step: f64,
+    /// Converged when |R| / |R_lambda| <= tol.
+    pub tol: f64,
+    pub max_iterations: usize,
+    /// Iterations at or below which the increment grows by 1.5.
+    pub easy_iterations: usize,
+    pub lambda_end: f64,
+    pub max_steps: usize,
+}
+
+impl Default for NewtonConfig {
+    fn default() -> Self {
+        Self {
+            control: Control::Arclength,
+            initial_step: 0.05,
+            max_step: 1.0,
+            min_step: 1e-10,
+            tol: 1e-8,
+            max_iterations: 12,
+            easy_iterations: 4,
+            lambda_end: 1.0,
+            max_steps: 100_000,
+        }
+    }
+}
+
+/// How a Newton run ended.
+#[derive(Debug)]
+pub struct NewtonResult {
+    pub stats: Stats,
+    pub stop: String,
+    pub error: Option<Error>,
+    pub u_end: Vec<f64>,
+    pub lambda_end: f64,
+}
+
+/// Follows the path from (u0, lambda0) to `cfg.lambda_end`; `on_point` gets
+/// every converged point (U, lambda), including each of `targets` exactly.
+pub fn run<P: ContinuationProblem>(
+    problem: &mut P,
+    u0: Vec<f64>,
+    lambda0: f64,
+    cfg: &NewtonConfig,
+    targets: &[f64],
+    mut on_point: impl FnMut(&[f64], f64, &Stats) -> Result<()>,
+) -> NewtonResult {
+    let mut stats = Stats::default();
+    let mut lu = SparseLu::new();
+    let mut u = u0;
+    let mut lambda = lambda0;
+    let forward = if cfg.lambda_end >= lambda0 { 1.0 } else { -1.0 };
+    let mut step = cfg.initial_step;
+    // Direction of the last increment (secant), unit in (U, lambda).
+    let mut dir: Option<(Vec<f64>, f64)> = None;
+    let mut pending: Vec<f64> = targets
+        .iter()
+        .copied()
+        .filter(|t| (t - lambda0) * forward > 0.0)
+        .collect();
+    pending.sort_by(|a, b| (a * forward).total_cmp(&(b * forward)));
+    if !pending
+        .iter()
+        .any(|t| (t - cfg.lambda_end).abs() <= 1e-14 * cfg.lambda_end.abs().max(1.0))
+    {
+        pending.push(cfg.lambda_end);
+    }
+    let done = |stats: Stats, stop: &str, error: Option<Error>, u: Vec<f64>, l: f64| NewtonResult {
+        stop: error
+            .as_ref()
+            .map(|e| e.kind().to_string())
+            .unwrap_or_else(|| stop.to_string()),
+        stats,
+        error,
+        u_end: u,
+        lambda_end: l,
+    };
+    for index in 0..cfg.max_steps {
+        if pending.is_empty() {
+            return done(stats, "end", None, u, lambda);
+        }
+        // Predictor direction: previous secant, or the tangent at the start.
+        let (du, dl) = match &dir {
+            Some(d) => d.clone(),
+            None => {
+                match tangent_direction(problem, &u, lambda, forward, &mut lu, &mut stats, index) {
+                    Ok(d) => d,
+                    Err(e) => return done(stats, "", Some(e), u, lambda),
+                }
+            }
+        };
+        // Predicted point; land on the next target by load control when it would be passed.
+        let next = pending[0];
+        let mut control = cfg.control;
+        let (mut up, mut lp) = match control {
+            Control::Load => {
+                let dlam = forward * step;
+                let lp = lambda + dlam;
+                let scale = if dl.abs() > 1e-300 { dlam / dl } else { 0.0 };
+                (
+                    u.iter()
+                        .zip(&du)
+                        .map(|(x, d)| x + scale * d)
+                        .collect::<Vec<_>>(),
+                    lp,
+                )
+            }
+            Control::Arclength => (
+                u.iter()
+                    .zip(&du)
+                    .map(|(x, d)| x + step * d)
+                    .collect::<Vec<_>>(),
+                lambda + step * dl,
+            ),
+        };
+        let mut hit_target = false;
+        if (lp - next) * forward >= 0.0 {
+            let frac = if (lp - lambda).abs() > 0.0 {
+                (next - lambda) / (lp - lambda)
+            } else {
+                1.0
+            };
+            up = u.iter().zip(&up).map(|(a, b)| a + frac * (b - a)).collect();
+            lp = next;
+            control = Control::Load;
+            hit_target = true;
+        }
+        match correct(
+            problem, &up, lp, control, &du, dl, cfg, &mut lu, &mut stats, index,
+        ) {
+            Ok((un, ln, iterations)) => {
+                stats.steps += 1;
+                let inc: Vec<f64> = un.iter().zip(&u).map(|(a, b)| a - b).collect();
+                let dln = ln - lambda;
+                let len = (dot(&inc, &inc) + dln * dln).sqrt();
+                if len > 0.0 {
+                    dir = Some((inc.iter().map(|x| x / len).collect(), dln / len));
+                }
+                u = un;
+                lambda = ln;
+                if hit_target {
+                    pending.remove(0);
+                }
+                if let Err(e) = on_point(&u, lambda, &stats) {
+                    return done(stats, "", Some(e), u, lambda);
+                }
+                if iterations <= cfg.easy_iterations && !hit_target {
+                    step = (1.5 * step).min(cfg.max_step);
+                }
+            }
+            Err(
+                e @ (Error::NoConvergence { .. }
+                | Error::SingularMatrix { .. }
+                | Error::NonFinite { .. }),
+            ) => {
+                step *= 0.5;
+                if step < cfg.min_step {
+                    let collapse = Error::StepCollapse {
+                        step: index,
+                        param: "lambda",
+                        at: lambda,
+                        length: step,
+                    };
+                    let _ = e;
+                    return done(stats, "", Some(collapse), u, lambda);
+                }
+            }
+            Err(e) => return done(stats, "", Some(e), u, lambda),
+        }
+    }
+    done(stats, "max_steps", None, u, lambda)
+}
+
+/// Unit tangent (U1, lambda1) at a point: Kt Ut = -R_lambda, oriented forward.
+fn tangent_direction<P: ContinuationProblem>(
+    problem: &mut P,
+    u: &[f64],
+    lambda: f64,
+    forward: f64,
+    lu: &mut SparseLu,
+    stats: &mut Stats,
+    index: usize,
+) -> Result<(Vec<f64>, f64)> {
+    let t = Instant::now();
+    let (k, rl) = problem.tangent(u, lambda)?;
+    charge(&mut stats.assembly_s, t);
+    let t = Instant::now();
+    let f = lu.factorize(&k).map_err(|detail| Error::SingularMatrix {
+        step: index,
+        param: "lambda",
+        at: lambda,
+        detail,
+    })?;
+    stats.factorizations += 1;
+    charge(&mut stats.factorization_s, t);
+    let t = Instant::now();
+    let ut = f.solve(&rl.iter().map(|x| -x).collect::<Vec<_>>());
+    stats.solves += 1;
+    charge(&mut stats.solve_s, t);
+    let l1 = forward / (1.0 + dot(&ut, &ut)).sqrt();
+    Ok((ut.iter().map(|x| x * l1).collect(), l1))
+}
+
+/// Full Newton from the predictor; returns the converged point and the iterations used.
+#[allow(clippy::too_many_arguments)]
+fn correct<P: ContinuationProblem>(
+    problem: &mut P,
+    up: &[f64],
+    lp: f64,
+    control: Control,
+    du: &[f64],
+    dl: f64,
+    cfg: &NewtonConfig,
+    lu: &mut SparseLu,
+    stats: &mut Stats,
+    index: usize,
+) -> Result<(Vec<f64>, f64, usize)> {
+    let mut u = up.to_vec();
+    let mut l = lp;
+    for it in 0..=cfg.max_iterations {
+        let t = Instant::now();
+        let r = problem.residual(&u, l)?;
+        stats.residual_evaluations += 1;
+        charge(&mut stats.assembly_s, t);
+        let t = Instant::now();
+        let (k, rl) = problem.tangent(&u, l)?;
+        charge(&mut stats.assembly_s, t);
+        let res = norm(&r) / norm(&rl).max(f64::MIN_POSITIVE);
+        if !res.is_finite() {
+            return Err(Error::NonFinite {
+                step: index,
+                param: "lambda",
+                at: l,
+                what: "residual".into(),
+            });
+        }
+        if res <= cfg.tol {
+            return Ok((u, l, it));
+        }
+        if it == cfg.max_iterations {
+            return Err(Error::NoConvergence {
+                step: index,
+                param: "lambda",
+                at: l,
+                iterations: it,
+                residual: res,
+                tolerance: cfg.tol,
+            });
+        }
+        let t = Instant::now();
+        let f = lu.factorize(&k).map_err(|detail| Error::SingularMatrix {
+            step: index,
+            param: "lambda",
+            at: l,
+            detail,
+        })?;
+        stats.factorizations += 1;
+        charge(&mut stats.factorization_s, t);
+        let t = Instant::now();
+        let ur = f.solve(&r.iter().map(|x| -x).collect::<Vec<_>>());
+        stats.solves += 1;
+        let dlam = match control {
+            Control::Load => 0.0,
+            Control::Arclength => {
+                // Bordered solve: dU = ur + dlam ut with Kt ut = -R_lambda and
+                // <dU + (U - U_p), t_U> + (dlam + l - l_p) t_l = 0.
+                let ut = f.solve(&rl.iter().map(|x| -x).collect::<Vec<_>>());
+                stats.solves += 1;
+                let offset: f64 = u
+                    .iter()
+                    .zip(up)
+                    .zip(du)
+                    .map(|((a, b), d)| (a - b) * d)
+                    .sum::<f64>()
+                    + (l - lp) * dl;
+                let num = -(dot(&ur, du) + offset);
+                let den = dot(&ut, du) + dl;
+                let dlam = num / den;
+                for (x, y) in u.iter_mut().zip(&ut) {
+                    *x += dlam * y;
+                }
+                dlam
+            }
+        };
+        charge(&mut stats.solve_s, t);
+        for (x, y) in u.iter_mut().zip(&ur) {
+            *x += y;
+        }
+        l += dlam;
+    }
+    unreachable!("the loop returns on its last iteration")
+}

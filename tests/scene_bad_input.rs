@@ -1,0 +1,151 @@
+//! Bad scene input: each case must give a clear error naming the file and the
+//! key, a non-zero exit code, no panic, and no output files.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn scene_with(edit: impl Fn(&str) -> String, name: &str) -> PathBuf {
+    let base = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/friction-plane.toml"),
+    )
+    .unwrap();
+    let dir = std::env::temp_dir().join(format!("anm-bad-{}-{name}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join(format!("{name}.toml"));
+    std::fs::write(&path, edit(&base)).unwrap();
+    path
+}
+
+/// Runs `anm run SCENE -o OUT` and returns (exit code, stderr, out dir exists).
+fn run(scene: &Path) -> (i32, String, bool) {
+    let out = scene.with_extension("out");
+    let o = Command::new(env!("CARGO_BIN_EXE_anm"))
+        .args(["run"])
+        .arg(scene)
+        .arg("-o")
+        .arg(&out)
+        .arg("--quiet")
+        .output()
+        .unwrap();
+    (
+        o.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&o.stderr).into_owned(),
+        out.exists(),
+    )
+}
+
+#[track_caller]
+fn expect_error(scene: &Path, needles: &[&str]) {
+    let (code, err, out_exists) = run(scene);
+    println!("{}: exit {code}: {err}", scene.display());
+    assert_ne!(code, 0, "must fail");
+    assert!(!err.contains("panicked"), "panic: {err}");
+    assert!(
+        err.contains(&scene.display().to_string()),
+        "error does not name the file: {err}"
+    );
+    for n in needles {
+        assert!(err.contains(n), "error does not mention `{n}`: {err}");
+    }
+    assert!(!out_exists, "no output may be written for a rejected scene");
+}
+
+#[test]
+fn unknown_key() {
+    let p = scene_with(
+        |s| s.replace("k = 1.0 ", "k = 1.0\nstiffness = 2.0 "),
+        "unknown",
+    );
+    expect_error(&p, &["spring.stiffness", "unknown field"]);
+}
+
+#[test]
+fn wrong_type() {
+    let p = scene_with(|s| s.replace("f = 0.2", "f = \"high\""), "type");
+    expect_error(&p, &["friction.f", "invalid type"]);
+}
+
+#[test]
+fn missing_file() {
+    let p = std::env::temp_dir().join("anm-no-such-scene.toml");
+    let (code, err, _) = run(&p);
+    assert_ne!(code, 0);
+    assert!(
+        err.contains("anm-no-such-scene.toml") && err.contains("cannot read"),
+        "{err}"
+    );
+}
+
+#[test]
+fn negative_stiffness() {
+    let p = scene_with(|s| s.replace("k = 1.0 ", "k = -1.0 "), "negk");
+    expect_error(&p, &["spring.k", "must be > 0", "-1"]);
+}
+
+#[test]
+fn negative_friction_coefficient() {
+    let p = scene_with(|s| s.replace("f = 0.2", "f = -0.2"), "negf");
+    expect_error(&p, &["friction.f", "must be > 0"]);
+}
+
+#[test]
+fn exponent_outside_unit_interval() {
+    for (name, q) in [("qneg", "-0.1"), ("qbig", "1.5")] {
+        let p = scene_with(|s| s.replace("q = 0.05", &format!("q = {q}")), name);
+        expect_error(&p, &["friction.q", "[0, 1]"]);
+    }
+}
+
+#[test]
+fn order_below_two() {
+    let p = scene_with(|s| s.replace("order = 20", "order = 1"), "order");
+    expect_error(&p, &["solver.order", ">= 2"]);
+}
+
+#[test]
+fn end_time_not_positive() {
+    for (name, t) in [("tzero", "0.0"), ("tneg", "-3.0")] {
+        let p = scene_with(|s| s.replace("t_end = 3.0", &format!("t_end = {t}")), name);
+        expect_error(&p, &["solver.t_end", "must be > 0"]);
+    }
+}
+
+#[test]
+fn unknown_kind_and_missing_section() {
+    let p = scene_with(
+        |s| s.replace("kind = \"friction-plane\"", "kind = \"friction-cube\""),
+        "kind",
+    );
+    expect_error(&p, &["scene.kind", "friction-cube"]);
+    let p = scene_with(|s| s.replace("[contact]", "[contact_law]"), "section");
+    expect_error(&p, &["contact_law"]);
+}
+
+#[test]
+fn key_of_another_kind() {
+    let p = scene_with(
+        |s| s.replace("V = 1.0 ", "V = 1.0\nOmega = 2.0 "),
+        "otherkind",
+    );
+    expect_error(
+        &p,
+        &["obstacle.Omega", "not used by a `friction-plane` scene"],
+    );
+}
+
+#[test]
+fn valid_scenes_pass_check() {
+    for s in ["friction-1d", "friction-plane", "friction-roller"] {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("scenes/{s}.toml"));
+        let o = Command::new(env!("CARGO_BIN_EXE_anm"))
+            .arg("check")
+            .arg(&path)
+            .output()
+            .unwrap();
+        assert!(
+            o.status.success(),
+            "{s}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+    }
+}
