@@ -1,6 +1,7 @@
 //! Run outputs: CSV curves, summary.json, SVG plots.
 
 pub mod plot;
+pub mod vtk;
 
 use crate::error::{Error, Result};
 use serde::Serialize;

@@ -1,0 +1,49 @@
+//! plate-cylinder (paper §2.2, DESIGN §4) through the scene driver.
+//!
+//! Goal: the scene runs to lambda = 1 and writes its outputs; the mesh
+//! convergence study (ignored test, run with `--ignored --nocapture`) prints
+//! uz_A at lambda = 0.05, 0.1, 0.2, 0.5, 1 for the 0.1, 0.05 and 0.025 m meshes.
+
+use anm::model::plate_cylinder::{run_loaded, run_scene};
+use anm::scene::shell::load;
+use std::path::Path;
+
+fn scene_with_mesh(mesh: &str, out: &Path) -> std::path::PathBuf {
+    let text = std::fs::read_to_string("scenes/plate-cylinder.toml").unwrap();
+    let text = text.replace("../meshes/plate-cylinder.msh", &format!("{}/meshes/{mesh}", env!("CARGO_MANIFEST_DIR")));
+    std::fs::create_dir_all(out).unwrap();
+    let p = out.join("scene.toml");
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+#[test]
+#[ignore]
+fn plate_cylinder_mesh_convergence() {
+    let lams = [0.05, 0.1, 0.2, 0.5, 1.0];
+    let mut rows = vec![];
+    for mesh in ["plate-cylinder-20x2.msh", "plate-cylinder-40x4.msh", "plate-cylinder-80x8.msh"] {
+        let dir = std::env::temp_dir().join(format!("anm-pc-{mesh}"));
+        let p = scene_with_mesh(mesh, &dir);
+        let r = run_scene(&p, &dir, false).unwrap();
+        println!("{mesh}: stop {:?}, steps {}, factorizations {}, wall {:.1} s", r.stop, r.steps, r.factorizations, r.wall_s);
+        rows.push((mesh, lams.map(|l| r.uz_at(l).unwrap_or(f64::NAN)), r.steps, r.factorizations, r.wall_s));
+    }
+    println!("{:<26} {:>10} {:>10} {:>10} {:>10} {:>10} {:>6} {:>6} {:>8}", "mesh", "0.05", "0.1", "0.2", "0.5", "1", "steps", "facts", "wall_s");
+    for (m, v, s, f, w) in &rows {
+        println!("{m:<26} {:>10.6} {:>10.6} {:>10.6} {:>10.6} {:>10.6} {s:>6} {f:>6} {w:>8.1}", v[0], v[1], v[2], v[3], v[4]);
+    }
+}
+
+#[test]
+fn plate_cylinder_scene_runs_and_writes_outputs() {
+    let dir = std::env::temp_dir().join("anm-pc-default");
+    let _ = std::fs::remove_dir_all(&dir);
+    let r = run_scene(Path::new("scenes/plate-cylinder.toml"), &dir, false).unwrap();
+    println!("{}", serde_json::to_string_pretty(&r).unwrap());
+    assert_eq!(r.stop.reason, "end", "{:?}", r.stop);
+    for f in ["history.csv", "summary.json", "plot.svg", "plate-cylinder.pvd", "obstacle_0.vtu", "shell_0000.vtu"] {
+        assert!(dir.join(f).exists(), "{f} missing");
+    }
+    let _ = (run_loaded, load);
+}
