@@ -36,14 +36,42 @@ fn plate_cylinder_mesh_convergence() {
 }
 
 #[test]
+fn gmsh_mesh_has_the_groups_rows_and_orientation() {
+    let m = anm::mesh::gmsh::read(Path::new("meshes/plate-cylinder.msh")).unwrap();
+    assert_eq!((m.nodes.len(), m.quads.len()), (41 * 5, 40 * 4));
+    let clamp = &m.groups["clamp"];
+    assert_eq!(clamp.len(), 5);
+    assert!(clamp.iter().all(|&n| m.nodes[n][0] == 0.0));
+    let a = &m.groups["load_A"];
+    assert_eq!(a.len(), 1);
+    assert!((m.nodes[a[0]] - anm::mesh::Vec3::new(2.0, 0.0, 0.0)).norm() < 1e-12);
+    for x in [1.0, 1.1, 1.2] {
+        let row = m.nodes.iter().filter(|p| (p[0] - x).abs() < 1e-9).count();
+        assert_eq!(row, 5, "node row at x = {x}");
+    }
+    let d = m.directors().unwrap();
+    // Consistent orientation: every director is the same unit normal (±z).
+    assert!(d.iter().all(|v| (v - d[0]).norm() < 1e-12 && (v[2].abs() - 1.0).abs() < 1e-12));
+}
+
+/// CI run: the coarse (0.1 m) mesh to lambda = 1 through the scene driver.
+#[test]
 fn plate_cylinder_scene_runs_and_writes_outputs() {
-    let dir = std::env::temp_dir().join("anm-pc-default");
+    let dir = std::env::temp_dir().join("anm-pc-ci");
     let _ = std::fs::remove_dir_all(&dir);
-    let r = run_scene(Path::new("scenes/plate-cylinder.toml"), &dir, false).unwrap();
+    let p = scene_with_mesh("plate-cylinder-20x2.msh", &dir);
+    let r = run_scene(&p, &dir, false).unwrap();
     println!("{}", serde_json::to_string_pretty(&r).unwrap());
     assert_eq!(r.stop.reason, "end", "{:?}", r.stop);
-    for f in ["history.csv", "summary.json", "plot.svg", "plate-cylinder.pvd", "obstacle_0.vtu", "shell_0000.vtu"] {
+    for f in ["history.csv", "summary.json", "plot.svg", "plate-cylinder.pvd", "obstacle_0.vtu", "shell_0000.vtu", "shell_final.vtu"] {
         assert!(dir.join(f).exists(), "{f} missing");
     }
+    // The uniform grid 0, 0.01, ..., 1 is complete and uz_A grows with lambda.
+    assert_eq!(r.history.len(), 101);
+    for (k, w) in r.history.windows(2).enumerate() {
+        assert!((w[1][0] - 0.01 * (k + 1) as f64).abs() < 1e-12);
+        assert!(w[1][1] > w[0][1], "uz_A not increasing at lambda {}", w[1][0]);
+    }
+    assert!((r.history[100][1] - r.uz_a_end).abs() < 1e-9);
     let _ = (run_loaded, load);
 }

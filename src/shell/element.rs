@@ -305,10 +305,9 @@ impl ShellElement {
         let (sig_star, _) = self.stresses(&e_pt);
         let mut f = [0.0; NDOF_EL];
         for i in 0..NPT {
-            self.pts[i].bt_sigma(&st.xs[0][i], &sig_star[i], &mut f);
-            for r in 1..p {
-                self.pts[i].bt_sigma(&st.xs[r][i], &st.sig[p - r][i], &mut f);
-            }
+            let pairs = std::iter::once((&st.xs[0][i], &sig_star[i]))
+                .chain((1..p).map(|r| (&st.xs[r][i], &st.sig[p - r][i])));
+            self.pts[i].bt_sigma_conv(pairs, &mut f);
         }
         f
     }

@@ -144,6 +144,48 @@ impl Point {
         }
     }
 
+    /// Σ_r B(x_r)ᵀ σ_r over a series of point vectors and stresses, by
+    /// first accumulating Σ_r σ_r[c] x_r (O(p) 3-vector work per strain
+    /// component) and scattering once: the convolution of an order-p
+    /// right-hand side.
+    pub fn bt_sigma_conv<'a>(
+        &self,
+        pairs: impl Iterator<Item = (&'a PointVectors, &'a Strain)>,
+        out: &mut [f64; NDOF_EL],
+    ) {
+        let mut acc = [[Vec3::zeros(); 5]; NSTRAIN];
+        let mut any = [false; NSTRAIN];
+        for (x, s) in pairs {
+            for (c, terms) in TERMS.iter().enumerate() {
+                let sc = s[c];
+                if sc == 0.0 || terms.is_empty() {
+                    continue;
+                }
+                any[c] = true;
+                for &(k, l, _) in terms.iter() {
+                    acc[c][l] += sc * x[l];
+                    if k != l {
+                        acc[c][k] += sc * x[k];
+                    }
+                }
+            }
+        }
+        for (c, terms) in TERMS.iter().enumerate() {
+            if !any[c] {
+                continue;
+            }
+            for &(k, l, coef) in terms.iter() {
+                for i in 0..4 {
+                    let (fk, fl) = (coef * self.phi[k][i], coef * self.phi[l][i]);
+                    for dim in 0..3 {
+                        out[6 * i + 3 * SLOT[k] + dim] += fk * acc[c][l][dim];
+                        out[6 * i + 3 * SLOT[l] + dim] += fl * acc[c][k][dim];
+                    }
+                }
+            }
+        }
+    }
+
     /// Geometric stiffness sum_c sigma_c d²E_c/dq² as an 8×8 matrix over
     /// (node, slot) pairs; the full 24×24 block is this ⊗ I3.
     pub fn geometric(&self, sigma: &Strain, kg: &mut [[f64; 8]; 8]) {
