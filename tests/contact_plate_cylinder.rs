@@ -10,7 +10,10 @@ use std::path::Path;
 
 fn scene_with_mesh(mesh: &str, out: &Path) -> std::path::PathBuf {
     let text = std::fs::read_to_string("scenes/plate-cylinder.toml").unwrap();
-    let text = text.replace("../meshes/plate-cylinder.msh", &format!("{}/meshes/{mesh}", env!("CARGO_MANIFEST_DIR")));
+    let text = text.replace(
+        "../meshes/plate-cylinder.msh",
+        &format!("{}/meshes/{mesh}", env!("CARGO_MANIFEST_DIR")),
+    );
     std::fs::create_dir_all(out).unwrap();
     let p = out.join("scene.toml");
     std::fs::write(&p, text).unwrap();
@@ -22,16 +25,35 @@ fn scene_with_mesh(mesh: &str, out: &Path) -> std::path::PathBuf {
 fn plate_cylinder_mesh_convergence() {
     let lams = [0.05, 0.1, 0.2, 0.5, 1.0];
     let mut rows = vec![];
-    for mesh in ["plate-cylinder-20x2.msh", "plate-cylinder-40x4.msh", "plate-cylinder-80x8.msh"] {
+    for mesh in [
+        "plate-cylinder-20x2.msh",
+        "plate-cylinder-40x4.msh",
+        "plate-cylinder-80x8.msh",
+    ] {
         let dir = std::env::temp_dir().join(format!("anm-pc-{mesh}"));
         let p = scene_with_mesh(mesh, &dir);
         let r = run_scene(&p, &dir, false).unwrap();
-        println!("{mesh}: stop {:?}, steps {}, factorizations {}, wall {:.1} s", r.stop, r.steps, r.factorizations, r.wall_s);
-        rows.push((mesh, lams.map(|l| r.uz_at(l).unwrap_or(f64::NAN)), r.steps, r.factorizations, r.wall_s));
+        println!(
+            "{mesh}: stop {:?}, steps {}, factorizations {}, wall {:.1} s",
+            r.stop, r.steps, r.factorizations, r.wall_s
+        );
+        rows.push((
+            mesh,
+            lams.map(|l| r.uz_at(l).unwrap_or(f64::NAN)),
+            r.steps,
+            r.factorizations,
+            r.wall_s,
+        ));
     }
-    println!("{:<26} {:>10} {:>10} {:>10} {:>10} {:>10} {:>6} {:>6} {:>8}", "mesh", "0.05", "0.1", "0.2", "0.5", "1", "steps", "facts", "wall_s");
+    println!(
+        "{:<26} {:>10} {:>10} {:>10} {:>10} {:>10} {:>6} {:>6} {:>8}",
+        "mesh", "0.05", "0.1", "0.2", "0.5", "1", "steps", "facts", "wall_s"
+    );
     for (m, v, s, f, w) in &rows {
-        println!("{m:<26} {:>10.6} {:>10.6} {:>10.6} {:>10.6} {:>10.6} {s:>6} {f:>6} {w:>8.1}", v[0], v[1], v[2], v[3], v[4]);
+        println!(
+            "{m:<26} {:>10.6} {:>10.6} {:>10.6} {:>10.6} {:>10.6} {s:>6} {f:>6} {w:>8.1}",
+            v[0], v[1], v[2], v[3], v[4]
+        );
     }
 }
 
@@ -51,7 +73,10 @@ fn gmsh_mesh_has_the_groups_rows_and_orientation() {
     }
     let d = m.directors().unwrap();
     // Consistent orientation: every director is the same unit normal (±z).
-    assert!(d.iter().all(|v| (v - d[0]).norm() < 1e-12 && (v[2].abs() - 1.0).abs() < 1e-12));
+    assert!(
+        d.iter()
+            .all(|v| (v - d[0]).norm() < 1e-12 && (v[2].abs() - 1.0).abs() < 1e-12)
+    );
 }
 
 /// CI run: the coarse (0.1 m) mesh to lambda = 1 through the scene driver.
@@ -63,14 +88,26 @@ fn plate_cylinder_scene_runs_and_writes_outputs() {
     let r = run_scene(&p, &dir, false).unwrap();
     println!("{}", serde_json::to_string_pretty(&r).unwrap());
     assert_eq!(r.stop.reason, "end", "{:?}", r.stop);
-    for f in ["history.csv", "summary.json", "plot.svg", "plate-cylinder.pvd", "obstacle_0.vtu", "shell_0000.vtu", "shell_final.vtu"] {
+    for f in [
+        "history.csv",
+        "summary.json",
+        "plot.svg",
+        "plate-cylinder.pvd",
+        "obstacle_0.vtu",
+        "shell_0000.vtu",
+        "shell_final.vtu",
+    ] {
         assert!(dir.join(f).exists(), "{f} missing");
     }
     // The uniform grid 0, 0.01, ..., 1 is complete and uz_A grows with lambda.
     assert_eq!(r.history.len(), 101);
     for (k, w) in r.history.windows(2).enumerate() {
         assert!((w[1][0] - 0.01 * (k + 1) as f64).abs() < 1e-12);
-        assert!(w[1][1] > w[0][1], "uz_A not increasing at lambda {}", w[1][0]);
+        assert!(
+            w[1][1] > w[0][1],
+            "uz_A not increasing at lambda {}",
+            w[1][0]
+        );
     }
     assert!((r.history[100][1] - r.uz_a_end).abs() < 1e-9);
     let _ = (run_loaded, load);

@@ -57,6 +57,9 @@ fn tip_reaction_on_a_plane_matches_the_propped_cantilever() {
         "propped cantilever: R = {r:.6} N (closed form {want:.6}), tip w = {wz:.6e} (gap {g:e}), {} steps",
         res.stats.steps
     );
-    assert!((r - want).abs() <= 1e-3 * want, "R = {r}, closed form {want}");
+    assert!(
+        (r - want).abs() <= 1e-3 * want,
+        "R = {r}, closed form {want}"
+    );
     assert!((wz + g).abs() <= 1e-3 * g, "tip deflection {wz} vs -g");
 }

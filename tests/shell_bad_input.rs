@@ -70,23 +70,35 @@ fn expect_err(r: anm::Result<impl std::fmt::Debug>, parts: &[&str]) -> Error {
 
 #[test]
 fn inverted_element_is_reported_with_file_and_line() {
-    let (m, line) = edited_mesh("inverted.msh", |n| vec![n[0].into(), n[3].into(), n[2].into(), n[1].into()]);
+    let (m, line) = edited_mesh("inverted.msh", |n| {
+        vec![n[0].into(), n[3].into(), n[2].into(), n[1].into()]
+    });
     let s = scene("inverted.toml", &m, &[]);
-    let e = expect_err(load(&s), &["inverted.msh", &format!(":{line}:"), "inverted"]);
+    let e = expect_err(
+        load(&s),
+        &["inverted.msh", &format!(":{line}:"), "inverted"],
+    );
     assert_eq!(e.kind(), "mesh");
 }
 
 #[test]
 fn degenerate_element_is_reported_with_file_and_line() {
-    let (m, line) = edited_mesh("degenerate.msh", |n| vec![n[0].into(), n[0].into(), n[2].into(), n[3].into()]);
+    let (m, line) = edited_mesh("degenerate.msh", |n| {
+        vec![n[0].into(), n[0].into(), n[2].into(), n[3].into()]
+    });
     let s = scene("degenerate.toml", &m, &[]);
-    let e = expect_err(load(&s), &["degenerate.msh", &format!(":{line}:"), "degenerate"]);
+    let e = expect_err(
+        load(&s),
+        &["degenerate.msh", &format!(":{line}:"), "degenerate"],
+    );
     assert_eq!(e.kind(), "mesh");
 }
 
 #[test]
 fn self_crossing_element_is_reported() {
-    let (m, line) = edited_mesh("bowtie.msh", |n| vec![n[0].into(), n[2].into(), n[1].into(), n[3].into()]);
+    let (m, line) = edited_mesh("bowtie.msh", |n| {
+        vec![n[0].into(), n[2].into(), n[1].into(), n[3].into()]
+    });
     let s = scene("bowtie.toml", &m, &[]);
     expect_err(load(&s), &["bowtie.msh", &format!(":{line}:")]);
 }
@@ -94,7 +106,11 @@ fn self_crossing_element_is_reported() {
 #[test]
 fn zero_and_negative_thickness_are_rejected() {
     for (name, v) in [("zero.toml", "0.0"), ("neg.toml", "-8e-4")] {
-        let s = scene(name, &mesh_path(), &[("thickness = 0.8e-3", &format!("thickness = {v}"))]);
+        let s = scene(
+            name,
+            &mesh_path(),
+            &[("thickness = 0.8e-3", &format!("thickness = {v}"))],
+        );
         let e = expect_err(load(&s), &[name, "shell.thickness", "must be > 0"]);
         assert_eq!(e.kind(), "invalid_input");
     }
@@ -102,24 +118,50 @@ fn zero_and_negative_thickness_are_rejected() {
 
 #[test]
 fn missing_physical_group_is_named() {
-    let s = scene("nogroup.toml", &mesh_path(), &[("clamp = [\"clamp\"]", "clamp = [\"left_edge\"]")]);
-    expect_err(load(&s), &["nogroup.toml", "mesh.clamp[0]", "`left_edge`", "plate-cylinder-20x2.msh"]);
-    let s = scene("nocontact.toml", &mesh_path(), &[("contact = \"strip\"", "contact = \"skin\"")]);
+    let s = scene(
+        "nogroup.toml",
+        &mesh_path(),
+        &[("clamp = [\"clamp\"]", "clamp = [\"left_edge\"]")],
+    );
+    expect_err(
+        load(&s),
+        &[
+            "nogroup.toml",
+            "mesh.clamp[0]",
+            "`left_edge`",
+            "plate-cylinder-20x2.msh",
+        ],
+    );
+    let s = scene(
+        "nocontact.toml",
+        &mesh_path(),
+        &[("contact = \"strip\"", "contact = \"skin\"")],
+    );
     expect_err(load(&s), &["mesh.contact", "`skin`"]);
 }
 
 #[test]
 fn load_on_a_point_that_is_not_a_node_is_rejected() {
-    let s = scene("offnode.toml", &mesh_path(), &[("point = [2.0, 0.0, 0.0]", "point = [2.0, 0.03, 0.0]")]);
+    let s = scene(
+        "offnode.toml",
+        &mesh_path(),
+        &[("point = [2.0, 0.0, 0.0]", "point = [2.0, 0.03, 0.0]")],
+    );
     let e = expect_err(load(&s), &["offnode.toml", "load[1].point", "not a node"]);
     assert_eq!(e.kind(), "invalid_input");
 }
 
 #[test]
 fn unknown_key_and_binary_mesh_are_rejected() {
-    let s = scene("typo.toml", &mesh_path(), &[("thickness = 0.8e-3", "thicknes = 0.8e-3")]);
+    let s = scene(
+        "typo.toml",
+        &mesh_path(),
+        &[("thickness = 0.8e-3", "thicknes = 0.8e-3")],
+    );
     expect_err(load(&s), &["typo.toml", "thicknes"]);
-    let text = std::fs::read_to_string(mesh_path()).unwrap().replacen("4.1 0 8", "4.1 1 8", 1);
+    let text = std::fs::read_to_string(mesh_path())
+        .unwrap()
+        .replacen("4.1 0 8", "4.1 1 8", 1);
     let p = tmp("binary.msh");
     std::fs::write(&p, text).unwrap();
     let s = scene("binary.toml", &p, &[]);
@@ -128,6 +170,13 @@ fn unknown_key_and_binary_mesh_are_rejected() {
 
 #[test]
 fn contact_row_without_nodes_is_rejected() {
-    let s = scene("rows.toml", &mesh_path(), &[("contact_rows = [1.0, 1.1, 1.2]", "contact_rows = [1.0, 1.05, 1.2]")]);
+    let s = scene(
+        "rows.toml",
+        &mesh_path(),
+        &[(
+            "contact_rows = [1.0, 1.1, 1.2]",
+            "contact_rows = [1.0, 1.05, 1.2]",
+        )],
+    );
     expect_err(load(&s), &["output.contact_rows[1]", "no node row"]);
 }

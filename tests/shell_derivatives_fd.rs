@@ -13,8 +13,8 @@ mod shell_common;
 use anm::contact::Obstacle;
 use anm::linalg::norm;
 use anm::mesh::{Vec3, structured};
-use anm::series::continuation::{ContinuationConfig, PathStep, run};
 use anm::series::ContinuationProblem;
+use anm::series::continuation::{ContinuationConfig, PathStep, run};
 use anm::shell::{FollowerCouple, ShellModel};
 
 fn problem() -> ShellModel {
@@ -51,7 +51,10 @@ fn tangent_matches_finite_differences_of_the_residual() {
     let u = state(&m, 0.01);
     let lambda = 0.7;
     let (k, rl) = m.tangent(&u, lambda).unwrap();
-    assert!(!m.active_pairs().is_empty(), "contact terms must be exercised");
+    assert!(
+        !m.active_pairs().is_empty(),
+        "contact terms must be exercised"
+    );
     let n = m.ndof();
     let mut kd = vec![vec![0.0; n]; n];
     for t in &k.entries {
@@ -74,10 +77,16 @@ fn tangent_matches_finite_differences_of_the_residual() {
     }
     let rp = m.residual(&u, lambda + h).unwrap();
     let rm = m.residual(&u, lambda - h).unwrap();
-    let rl_fd: Vec<f64> = rp.iter().zip(&rm).map(|(a, b)| (a - b) / (2.0 * h)).collect();
+    let rl_fd: Vec<f64> = rp
+        .iter()
+        .zip(&rm)
+        .map(|(a, b)| (a - b) / (2.0 * h))
+        .collect();
     let dl: Vec<f64> = rl_fd.iter().zip(&rl).map(|(a, b)| a - b).collect();
     let lerr = norm(&dl) / norm(&rl);
-    println!("tangent vs FD: max |K - K_fd| / max|K| = {worst:.3e}; dR/dlambda rel. error {lerr:.3e}");
+    println!(
+        "tangent vs FD: max |K - K_fd| / max|K| = {worst:.3e}; dR/dlambda rel. error {lerr:.3e}"
+    );
     assert!(worst < 1e-7, "tangent mismatch {worst:.3e}");
     assert!(lerr < 1e-7, "dR/dlambda mismatch {lerr:.3e}");
 }
@@ -118,22 +127,39 @@ fn series_terms_match_the_residual_along_the_series() {
             }
             l = l * a + s.lambda[p];
         }
-        let r: Vec<f64> = m.residual(&u, l).unwrap().iter().zip(&r0).map(|(a, b)| a - b).collect();
+        let r: Vec<f64> = m
+            .residual(&u, l)
+            .unwrap()
+            .iter()
+            .zip(&r0)
+            .map(|(a, b)| a - b)
+            .collect();
         let r = norm(&r) / scale;
         let du = norm(&s.u[n]) * a.powi(n as i32);
         table.push((n, r, du));
     }
     println!("start residual |R0|/|R_l| = {:.3e}", norm(&r0) / scale);
-    println!("step 2, a = a_max/2 = {a:.4e}, lambda(a) - lambda0 = {:.4e}", s.eval(a).1 - s.lambda[0]);
+    println!(
+        "step 2, a = a_max/2 = {a:.4e}, lambda(a) - lambda0 = {:.4e}",
+        s.eval(a).1 - s.lambda[0]
+    );
     println!("{:>3} {:>12} {:>12}", "N", "|R-R0|/|R_l|", "|U_N| a^N");
     for (n, r, du) in &table {
         println!("{n:>3} {r:>12.3e} {du:>12.3e}");
     }
     let (r2, r15) = (table[1].1, table[14].1);
     assert!(r15 < 1e-9, "residual along the order-15 series {r15:.3e}");
-    assert!(r2 > 1e4 * r15, "the check must discriminate: order 2 gives {r2:.3e}");
+    assert!(
+        r2 > 1e4 * r15,
+        "the check must discriminate: order 2 gives {r2:.3e}"
+    );
     // The truncation error falls with the order until the round-off floor.
     for w in table.windows(2).take(9) {
-        assert!(w[1].1 <= 2.0 * w[0].1, "order {}: residual grew: {:?}", w[1].0, w);
+        assert!(
+            w[1].1 <= 2.0 * w[0].1,
+            "order {}: residual grew: {:?}",
+            w[1].0,
+            w
+        );
     }
 }

@@ -69,7 +69,13 @@ fn pinched_cylinder_converges_to_1_8248e_5() {
     let mut last = 0.0;
     for n in [4, 8, 16, 32] {
         last = pinched_cylinder(n);
-        println!("{:>3}x{:<2} {:>12.5e} {:>10.4}", n, n, last, last / 1.8248e-5);
+        println!(
+            "{:>3}x{:<2} {:>12.5e} {:>10.4}",
+            n,
+            n,
+            last,
+            last / 1.8248e-5
+        );
     }
     assert_rel(last, 1.8248e-5, 0.02, "pinched cylinder 32x32");
 }

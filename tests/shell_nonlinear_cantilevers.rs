@@ -98,7 +98,10 @@ fn end_moment_rolls_the_strip_into_a_circle() {
     let targets = [0.25, 0.5, 0.75, 1.0];
     let (d, steps) = tip_path(&mut m, &tip, &targets);
     println!("rolled cantilever, {NX} elements, {steps} ANM steps");
-    println!("{:>6} {:>10} {:>10} {:>10} {:>10} {:>9}", "M/Mmax", "x_tip", "x_exact", "z_tip", "z_exact", "err/L");
+    println!(
+        "{:>6} {:>10} {:>10} {:>10} {:>10} {:>9}",
+        "M/Mmax", "x_tip", "x_exact", "z_tip", "z_exact", "err/L"
+    );
     let mut worst = 0.0f64;
     for (lt, di) in targets.iter().zip(&d) {
         let theta = lt * 2.0 * std::f64::consts::PI;
@@ -123,11 +126,21 @@ fn end_shear_matches_the_exact_elastica() {
     let exact = [(0.05643, 0.30172), (0.16064, 0.49346), (0.32894, 0.66996)];
     let (d, steps) = tip_path(&mut m, &tip, &targets);
     println!("elastica, {NX} elements, {steps} ANM steps");
-    println!("{:>4} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9}", "k", "u/L", "exact", "err", "w/L", "exact", "err");
+    println!(
+        "{:>4} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9}",
+        "k", "u/L", "exact", "err", "w/L", "exact", "err"
+    );
     for ((lt, di), (ue, we)) in targets.iter().zip(&d).zip(exact) {
         let (u, w) = (-di[0] / L, di[2] / L);
         let (eu, ew) = ((u - ue) / ue, (w - we) / we);
-        println!("{:>4.0} {u:>9.5} {ue:>9.5} {eu:>9.2e} {w:>9.5} {we:>9.5} {ew:>9.2e}", lt * 4.0);
-        assert!(eu.abs() <= 0.01 && ew.abs() <= 0.01, "k = {}: u/L {u}, w/L {w}", lt * 4.0);
+        println!(
+            "{:>4.0} {u:>9.5} {ue:>9.5} {eu:>9.2e} {w:>9.5} {we:>9.5} {ew:>9.2e}",
+            lt * 4.0
+        );
+        assert!(
+            eu.abs() <= 0.01 && ew.abs() <= 0.01,
+            "k = {}: u/L {u}, w/L {w}",
+            lt * 4.0
+        );
     }
 }

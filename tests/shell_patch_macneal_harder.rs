@@ -35,7 +35,13 @@ fn patch() -> Mesh {
         Vec3::new(0.16, 0.08, 0.0),
         Vec3::new(0.08, 0.08, 0.0),
     ];
-    let quads = vec![[0, 1, 5, 4], [1, 2, 6, 5], [2, 3, 7, 6], [3, 0, 4, 7], [4, 5, 6, 7]];
+    let quads = vec![
+        [0, 1, 5, 4],
+        [1, 2, 6, 5],
+        [2, 3, 7, 6],
+        [3, 0, 4, 7],
+        [4, 5, 6, 7],
+    ];
     let mut groups = BTreeMap::new();
     groups.insert("boundary".to_string(), vec![0, 1, 2, 3]);
     Mesh {
@@ -74,8 +80,13 @@ fn run(exact: impl Fn(&Vec3) -> [f64; 6], free_boundary: &[usize]) -> f64 {
     }
     let is_fixed = |i: usize| fixed.contains(&(i / 6, i % 6));
     let free: Vec<usize> = (0..nfull).filter(|&i| !is_fixed(i)).collect();
-    let up: Vec<f64> = (0..nfull).map(|i| if is_fixed(i) { ex[i / 6][i % 6] } else { 0.0 }).collect();
-    let rows: Vec<Vec<f64>> = free.iter().map(|&i| free.iter().map(|&j| kd[i][j]).collect()).collect();
+    let up: Vec<f64> = (0..nfull)
+        .map(|i| if is_fixed(i) { ex[i / 6][i % 6] } else { 0.0 })
+        .collect();
+    let rows: Vec<Vec<f64>> = free
+        .iter()
+        .map(|&i| free.iter().map(|&j| kd[i][j]).collect())
+        .collect();
     let rhs: Vec<f64> = free
         .iter()
         .map(|&i| -(0..nfull).map(|j| kd[i][j] * up[j]).sum::<f64>())
@@ -102,7 +113,16 @@ fn membrane_patch_test_on_distorted_mesh() {
     let nu: f64 = 0.25;
     let e33 = -nu / (1.0 - nu) * 2e-3;
     let err = run(
-        |x| [1e-3 * (x[0] + x[1] / 2.0), 1e-3 * (x[1] + x[0] / 2.0), 0.0, 0.0, 0.0, e33],
+        |x| {
+            [
+                1e-3 * (x[0] + x[1] / 2.0),
+                1e-3 * (x[1] + x[0] / 2.0),
+                0.0,
+                0.0,
+                0.0,
+                e33,
+            ]
+        },
         &[5],
     );
     println!("membrane patch test: max relative nodal error {err:.3e}");

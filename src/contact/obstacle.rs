@@ -13,6 +13,9 @@
 //! polynomial; [`GapSeries`] propagates d² = y·y, d = sqrt(d²) and n = y / d
 //! coefficient by coefficient (crate::series::taylor), O(p) per order.
 
+// Node/dof/component loops read better with explicit indices.
+#![allow(clippy::needless_range_loop)]
+
 use crate::series::taylor::{div_coeff, sqrt_coeff};
 use nalgebra::{Matrix3, Vector3};
 
@@ -20,8 +23,15 @@ pub type Vec3 = Vector3<f64>;
 
 #[derive(Clone, Debug, PartialEq)]
 pub enum Obstacle {
-    Plane { point: Vec3, normal: Vec3 },
-    Cylinder { centre: Vec3, axis: Vec3, radius: f64 },
+    Plane {
+        point: Vec3,
+        normal: Vec3,
+    },
+    Cylinder {
+        centre: Vec3,
+        axis: Vec3,
+        radius: f64,
+    },
 }
 
 /// Gap, normal and normal derivative at a point.
@@ -195,8 +205,8 @@ mod tests {
 
     #[test]
     fn cylinder_gap_normal_and_series_match_direct_evaluation() {
-        let cyl = Obstacle::cylinder(Vec3::new(1.0, 0.0, 0.5001), Vec3::new(0.0, 2.0, 0.0), 0.5)
-            .unwrap();
+        let cyl =
+            Obstacle::cylinder(Vec3::new(1.0, 0.0, 0.5001), Vec3::new(0.0, 2.0, 0.0), 0.5).unwrap();
         let g = cyl.gap(&Vec3::new(1.0, 0.3, 0.0)).unwrap();
         assert!((g.h - 1e-4).abs() < 1e-15 && (g.n - Vec3::new(0.0, 0.0, -1.0)).norm() < 1e-15);
         // dn/dx against central differences.
@@ -223,7 +233,9 @@ mod tests {
         let xa = xs[0] + xs[1] * a + xs[2] * a * a;
         let ga = cyl.gap(&xa).unwrap();
         let h: f64 = s.h.iter().rev().fold(0.0, |acc, c| acc * a + c);
-        let n: Vec3 = (0..s.orders()).rev().fold(Vec3::zeros(), |acc, r| acc * a + s.normal(r));
+        let n: Vec3 = (0..s.orders())
+            .rev()
+            .fold(Vec3::zeros(), |acc, r| acc * a + s.normal(r));
         assert!((h - ga.h).abs() < 1e-13, "{h} vs {}", ga.h);
         assert!((n - ga.n).norm() < 1e-13);
     }

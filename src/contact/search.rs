@@ -50,7 +50,12 @@ pub fn pairs(
 
 /// Indices into `pairs` of the pairs whose current gap is below `distance`
 /// (positions `x` of all nodes).
-pub fn active(pairs: &[ContactPair], x: &[Vec3], obstacles: &[Obstacle], distance: f64) -> Vec<usize> {
+pub fn active(
+    pairs: &[ContactPair],
+    x: &[Vec3],
+    obstacles: &[Obstacle],
+    distance: f64,
+) -> Vec<usize> {
     pairs
         .iter()
         .enumerate()
@@ -70,7 +75,9 @@ mod tests {
     #[test]
     fn search_keeps_only_near_nodes_and_sets_delta_to_the_initial_gap() {
         let cyl = Obstacle::cylinder(Vec3::new(1.0, 0.0, 0.5001), Vec3::y(), 0.5).unwrap();
-        let x: Vec<Vec3> = (0..=20).map(|i| Vec3::new(0.1 * i as f64, 0.0, 0.0)).collect();
+        let x: Vec<Vec3> = (0..=20)
+            .map(|i| Vec3::new(0.1 * i as f64, 0.0, 0.0))
+            .collect();
         let all: Vec<usize> = (0..x.len()).collect();
         let p = pairs(&all, &x, std::slice::from_ref(&cyl), 1e9, 1e-6).unwrap();
         assert!((p[10].law.delta - 1e-4).abs() < 1e-15);

@@ -106,7 +106,9 @@ pub fn parse(path: &Path, text: &str) -> Result<Mesh> {
                     )));
                 }
                 if v[1] != "0" {
-                    return Err(ln.err("binary .msh is not supported: save as ASCII (Mesh.Binary = 0)"));
+                    return Err(
+                        ln.err("binary .msh is not supported: save as ASCII (Mesh.Binary = 0)")
+                    );
                 }
                 seen_format = true;
                 ln.next()?;
@@ -136,7 +138,8 @@ pub fn parse(path: &Path, text: &str) -> Result<Mesh> {
                         let tag = v[0] as i64;
                         // Points: tag x y z nphys ...; others: tag 6 box values nphys ...
                         let at = if dim == 0 { 4 } else { 7 };
-                        let np = *v.get(at).ok_or_else(|| ln.err("truncated entity line"))? as usize;
+                        let np =
+                            *v.get(at).ok_or_else(|| ln.err("truncated entity line"))? as usize;
                         let phys: Vec<i64> = v
                             .get(at + 1..at + 1 + np)
                             .ok_or_else(|| ln.err("truncated entity line"))?
@@ -170,7 +173,8 @@ pub fn parse(path: &Path, text: &str) -> Result<Mesh> {
                 let h: Vec<usize> = ln.numbers(4)?;
                 for _ in 0..h[0] {
                     let b: Vec<i64> = ln.numbers(4)?;
-                    let (dim, etag, ty, count) = (b[0] as usize, b[1], b[2] as usize, b[3] as usize);
+                    let (dim, etag, ty, count) =
+                        (b[0] as usize, b[1], b[2] as usize, b[3] as usize);
                     let nn = match ty {
                         15 => 1,
                         1 => 2,
@@ -224,7 +228,10 @@ pub fn parse(path: &Path, text: &str) -> Result<Mesh> {
                 .cloned()
                 .unwrap_or_else(|| format!("{dim}:{ptag}"));
             group_lines.entry(name.clone()).or_insert(line);
-            group_nodes.entry(name).or_default().extend(idx.iter().copied());
+            group_nodes
+                .entry(name)
+                .or_default()
+                .extend(idx.iter().copied());
         }
     }
     // Keep only nodes used by quadrilaterals.
@@ -247,7 +254,9 @@ pub fn parse(path: &Path, text: &str) -> Result<Mesh> {
                 return Err(Error::Mesh {
                     file: path.to_path_buf(),
                     line: group_lines[&name],
-                    problem: format!("physical group `{name}` has a node outside every quadrilateral"),
+                    problem: format!(
+                        "physical group `{name}` has a node outside every quadrilateral"
+                    ),
                 });
             }
             v.push(used[n]);

@@ -35,15 +35,18 @@ impl Mesh {
     /// The node set `name`; the error names the mesh file, the scene key that
     /// asked for it, and the groups that exist.
     pub fn group(&self, name: &str, scene: &std::path::Path, key: &str) -> Result<&[usize]> {
-        self.groups.get(name).map(|v| v.as_slice()).ok_or_else(|| Error::Invalid {
-            file: scene.to_path_buf(),
-            key: key.to_string(),
-            problem: format!(
-                "physical group `{name}` not found in mesh {} (it has: {})",
-                self.file.display(),
-                self.groups.keys().cloned().collect::<Vec<_>>().join(", ")
-            ),
-        })
+        self.groups
+            .get(name)
+            .map(|v| v.as_slice())
+            .ok_or_else(|| Error::Invalid {
+                file: scene.to_path_buf(),
+                key: key.to_string(),
+                problem: format!(
+                    "physical group `{name}` not found in mesh {} (it has: {})",
+                    self.file.display(),
+                    self.groups.keys().cloned().collect::<Vec<_>>().join(", ")
+                ),
+            })
     }
 
     /// The node within `tol` of `p`, if any (the nearest one).

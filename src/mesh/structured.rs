@@ -21,7 +21,12 @@ pub fn map(label: &str, nx: usize, ny: usize, f: impl Fn(f64, f64) -> (Vec3, Vec
             let id = nodes.len();
             nodes.push(x);
             normals.push(n.normalize());
-            for (name, on) in [("s0", i == 0), ("s1", i == nx), ("t0", j == 0), ("t1", j == ny)] {
+            for (name, on) in [
+                ("s0", i == 0),
+                ("s1", i == nx),
+                ("t0", j == 0),
+                ("t1", j == ny),
+            ] {
                 if on {
                     groups.entry(name.into()).or_default().push(id);
                 }
@@ -61,7 +66,15 @@ pub fn rectangle(x0: f64, x1: f64, y0: f64, y1: f64, nx: usize, ny: usize) -> Me
 /// Cylindrical panel of radius r about the x axis: x = x0 + s (x1 − x0),
 /// angle φ = φ0 + t (φ1 − φ0) from +z toward +y, position
 /// (x, r sin φ, r cos φ). The normal ∂x/∂s × ∂x/∂t is outward for φ1 > φ0.
-pub fn cylinder_panel(r: f64, x0: f64, x1: f64, phi0: f64, phi1: f64, nx: usize, ny: usize) -> Mesh {
+pub fn cylinder_panel(
+    r: f64,
+    x0: f64,
+    x1: f64,
+    phi0: f64,
+    phi1: f64,
+    nx: usize,
+    ny: usize,
+) -> Mesh {
     map("cylinder", nx, ny, |s, t| {
         let x = x0 + s * (x1 - x0);
         let phi = phi0 + t * (phi1 - phi0);

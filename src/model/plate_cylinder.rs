@@ -205,14 +205,15 @@ pub fn run_loaded(scene: &ShellScene, out_dir: Option<&Path>, progress: bool) ->
     let mut pvd: Vec<(f64, usize, String)> = vec![];
     let mut pull_bound = 0.0f64;
     let mut last: Option<(Vec<f64>, f64, Vec<usize>)> = None;
-    let mut vtk_count = 0usize;
     let write_shell = |file: &str, full: &[f64], active: &[usize]| -> Result<()> {
         let Some(d) = out_dir else { return Ok(()) };
         let x = probe.positions(full);
         let n = x.len();
         let disp: Vec<Vec3> = (0..n).map(|i| x[i] - probe.x0[i]).collect();
         let dir: Vec<Vec3> = (0..n)
-            .map(|i| scene.directors[i] + Vec3::new(full[6 * i + 3], full[6 * i + 4], full[6 * i + 5]))
+            .map(|i| {
+                scene.directors[i] + Vec3::new(full[6 * i + 3], full[6 * i + 4], full[6 * i + 5])
+            })
             .collect();
         let (r, f) = probe.reactions(full, active);
         write_vtu(
@@ -227,53 +228,63 @@ pub fn run_loaded(scene: &ShellScene, out_dir: Option<&Path>, progress: bool) ->
             ],
         )
     };
-    let result = run(&mut model, vec![0.0; n_dof], 0.0, &cfg, |step: &PathStep, stats: &Stats| {
-        let full0 = probe.expand(&step.u[0]);
-        let active = search::active(&probe.pairs, &probe.positions(&full0), &probe.obstacles, probe.distance);
-        pull_bound = pull_bound.max((probe.pairs.len() - active.len()) as f64 * scene.contact_eta);
-        if step.index == 0 {
-            history.push(probe.row(step.lambda[0], &full0, &active));
-            next_grid = 1;
-            write_shell("shell_0000.vtu", &full0, &active)?;
-            pvd.push((step.lambda[0], 0, "shell_0000.vtu".into()));
-        }
-        loop {
-            let g = next_grid as f64 * scene.lambda_step;
-            if g > step.lambda_end + 1e-12 || g > cfg.lambda_end + 1e-12 {
-                break;
+    let result = run(
+        &mut model,
+        vec![0.0; n_dof],
+        0.0,
+        &cfg,
+        |step: &PathStep, stats: &Stats| {
+            let full0 = probe.expand(&step.u[0]);
+            let active = search::active(
+                &probe.pairs,
+                &probe.positions(&full0),
+                &probe.obstacles,
+                probe.distance,
+            );
+            pull_bound =
+                pull_bound.max((probe.pairs.len() - active.len()) as f64 * scene.contact_eta);
+            if step.index == 0 {
+                history.push(probe.row(step.lambda[0], &full0, &active));
+                next_grid = 1;
+                write_shell("shell_0000.vtu", &full0, &active)?;
+                pvd.push((step.lambda[0], 0, "shell_0000.vtu".into()));
             }
-            let u = if (g - step.lambda_end).abs() < 1e-12 {
-                Some(step.u_end.clone())
-            } else {
-                step.a_at_lambda(g).map(|a| step.eval(a).0)
-            };
-            if let Some(u) = u {
-                history.push(probe.row(g, &probe.expand(&u), &active));
+            loop {
+                let g = next_grid as f64 * scene.lambda_step;
+                if g > step.lambda_end + 1e-12 || g > cfg.lambda_end + 1e-12 {
+                    break;
+                }
+                let u = if (g - step.lambda_end).abs() < 1e-12 {
+                    Some(step.u_end.clone())
+                } else {
+                    step.a_at_lambda(g).map(|a| step.eval(a).0)
+                };
+                if let Some(u) = u {
+                    history.push(probe.row(g, &probe.expand(&u), &active));
+                }
+                next_grid += 1;
             }
-            next_grid += 1;
-        }
-        let full_end = probe.expand(&step.u_end);
-        if scene.vtk_every > 0 && (step.index + 1) % scene.vtk_every == 0 {
-            vtk_count += 1;
-            let name = format!("shell_{:04}.vtu", step.index + 1);
-            write_shell(&name, &full_end, &active)?;
-            pvd.push((step.lambda_end, 0, name));
-        }
-        last = Some((full_end, step.lambda_end, active));
-        if let Some(b) = &bar {
-            let frac = (step.lambda_end / cfg.lambda_end).clamp(0.0, 1.0);
-            b.set_position((frac * 1000.0) as u64);
-            b.set_message(format!(
-                "lambda {:.4}  steps {}  factorizations {}",
-                step.lambda_end, stats.steps, stats.factorizations
-            ));
-        }
-        Ok(())
-    });
+            let full_end = probe.expand(&step.u_end);
+            if scene.vtk_every > 0 && (step.index + 1).is_multiple_of(scene.vtk_every) {
+                let name = format!("shell_{:04}.vtu", step.index + 1);
+                write_shell(&name, &full_end, &active)?;
+                pvd.push((step.lambda_end, 0, name));
+            }
+            last = Some((full_end, step.lambda_end, active));
+            if let Some(b) = &bar {
+                let frac = (step.lambda_end / cfg.lambda_end).clamp(0.0, 1.0);
+                b.set_position((frac * 1000.0) as u64);
+                b.set_message(format!(
+                    "lambda {:.4}  steps {}  factorizations {}",
+                    step.lambda_end, stats.steps, stats.factorizations
+                ));
+            }
+            Ok(())
+        },
+    );
     if let Some(b) = &bar {
         b.finish();
     }
-    let _ = vtk_count;
     let (stop, uz_end) = {
         let reason = result.stop.clone();
         let message = result.error.as_ref().map(|e| e.to_string());
@@ -284,7 +295,11 @@ pub fn run_loaded(scene: &ShellScene, out_dir: Option<&Path>, progress: bool) ->
                 lambda: Some(result.lambda_end),
                 message,
             },
-            result.u_end.get(0).map(|_| probe.expand(&result.u_end)[6 * scene.probe + 2]).unwrap_or(0.0),
+            if result.u_end.is_empty() {
+                0.0
+            } else {
+                probe.expand(&result.u_end)[6 * scene.probe + 2]
+            },
         )
     };
     if let (Some(d), Some((full, lam, active))) = (out_dir, &last) {
@@ -341,7 +356,13 @@ pub fn run_loaded(scene: &ShellScene, out_dir: Option<&Path>, progress: bool) ->
     if let Some(d) = out_dir {
         write_json(&d.join("summary.json"), &report)?;
         if scene.plot && report.history.len() > 1 {
-            let col = |k: usize| report.history.iter().map(|r| (r[0], r[k])).collect::<Vec<_>>();
+            let col = |k: usize| {
+                report
+                    .history
+                    .iter()
+                    .map(|r| (r[0], r[k]))
+                    .collect::<Vec<_>>()
+            };
             draw(
                 &d.join("plot.svg"),
                 &[

@@ -44,7 +44,10 @@ pub fn write_vtu(
     for d in data {
         match d {
             PointData::Scalar(name, v) => {
-                let _ = writeln!(s, r#"<DataArray type="Float64" Name="{name}" format="ascii">"#);
+                let _ = writeln!(
+                    s,
+                    r#"<DataArray type="Float64" Name="{name}" format="ascii">"#
+                );
                 for x in v {
                     let _ = writeln!(s, "{:.10e}", finite(*x));
                 }
@@ -55,7 +58,13 @@ pub fn write_vtu(
                     r#"<DataArray type="Float64" Name="{name}" NumberOfComponents="3" format="ascii">"#
                 );
                 for x in v {
-                    let _ = writeln!(s, "{:.10e} {:.10e} {:.10e}", finite(x[0]), finite(x[1]), finite(x[2]));
+                    let _ = writeln!(
+                        s,
+                        "{:.10e} {:.10e} {:.10e}",
+                        finite(x[0]),
+                        finite(x[1]),
+                        finite(x[2])
+                    );
                 }
             }
         }
@@ -63,17 +72,32 @@ pub fn write_vtu(
     }
     let _ = writeln!(s, "</PointData>");
     let _ = writeln!(s, "<Points>");
-    let _ = writeln!(s, r#"<DataArray type="Float64" NumberOfComponents="3" format="ascii">"#);
+    let _ = writeln!(
+        s,
+        r#"<DataArray type="Float64" NumberOfComponents="3" format="ascii">"#
+    );
     for p in points {
-        let _ = writeln!(s, "{:.12e} {:.12e} {:.12e}", finite(p[0]), finite(p[1]), finite(p[2]));
+        let _ = writeln!(
+            s,
+            "{:.12e} {:.12e} {:.12e}",
+            finite(p[0]),
+            finite(p[1]),
+            finite(p[2])
+        );
     }
     let _ = writeln!(s, "</DataArray>\n</Points>\n<Cells>");
-    let _ = writeln!(s, r#"<DataArray type="Int64" Name="connectivity" format="ascii">"#);
+    let _ = writeln!(
+        s,
+        r#"<DataArray type="Int64" Name="connectivity" format="ascii">"#
+    );
     for q in quads {
         let _ = writeln!(s, "{} {} {} {}", q[0], q[1], q[2], q[3]);
     }
     let _ = writeln!(s, "</DataArray>");
-    let _ = writeln!(s, r#"<DataArray type="Int64" Name="offsets" format="ascii">"#);
+    let _ = writeln!(
+        s,
+        r#"<DataArray type="Int64" Name="offsets" format="ascii">"#
+    );
     for i in 0..quads.len() {
         let _ = writeln!(s, "{}", 4 * (i + 1));
     }
@@ -82,7 +106,10 @@ pub fn write_vtu(
     for _ in quads {
         let _ = writeln!(s, "9");
     }
-    let _ = writeln!(s, "</DataArray>\n</Cells>\n</Piece>\n</UnstructuredGrid>\n</VTKFile>");
+    let _ = writeln!(
+        s,
+        "</DataArray>\n</Cells>\n</Piece>\n</UnstructuredGrid>\n</VTKFile>"
+    );
     std::fs::write(path, s).map_err(io(path))
 }
 
@@ -94,10 +121,16 @@ fn finite(x: f64) -> f64 {
 pub fn write_pvd(path: &Path, entries: &[(f64, usize, String)]) -> Result<()> {
     let mut s = String::new();
     let _ = writeln!(s, r#"<?xml version="1.0"?>"#);
-    let _ = writeln!(s, r#"<VTKFile type="Collection" version="0.1" byte_order="LittleEndian">"#);
+    let _ = writeln!(
+        s,
+        r#"<VTKFile type="Collection" version="0.1" byte_order="LittleEndian">"#
+    );
     let _ = writeln!(s, "<Collection>");
     for (t, part, file) in entries {
-        let _ = writeln!(s, r#"<DataSet timestep="{t:.10e}" group="" part="{part}" file="{file}"/>"#);
+        let _ = writeln!(
+            s,
+            r#"<DataSet timestep="{t:.10e}" group="" part="{part}" file="{file}"/>"#
+        );
     }
     let _ = writeln!(s, "</Collection>\n</VTKFile>");
     std::fs::write(path, s).map_err(io(path))
@@ -112,7 +145,11 @@ pub fn cylinder_surface(
     len: f64,
     n: usize,
 ) -> (Vec<Vector3<f64>>, Vec<[usize; 4]>) {
-    let helper = if a[0].abs() < 0.9 { Vector3::x() } else { Vector3::y() };
+    let helper = if a[0].abs() < 0.9 {
+        Vector3::x()
+    } else {
+        Vector3::y()
+    };
     let e1 = a.cross(&helper).normalize();
     let e2 = a.cross(&e1);
     let mut pts = Vec::with_capacity(2 * n);

@@ -227,7 +227,10 @@ pub fn load(path: &Path) -> Result<ShellScene> {
     let young = c.positive("material.young", raw.material.young)?;
     let poisson = c.finite("material.poisson", raw.material.poisson)?;
     if !(-1.0 < poisson && poisson < 0.5) {
-        return Err(c.fail("material.poisson", format!("must lie in (-1, 0.5), got {poisson}")));
+        return Err(c.fail(
+            "material.poisson",
+            format!("must lie in (-1, 0.5), got {poisson}"),
+        ));
     }
     let thickness = c.positive("shell.thickness", raw.shell.thickness)?;
     let tol = c.positive("mesh.node_tolerance", raw.mesh.node_tolerance)?;
@@ -239,49 +242,78 @@ pub fn load(path: &Path) -> Result<ShellScene> {
         clamped.extend_from_slice(mesh.group(g, path, &format!("mesh.clamp[{i}]"))?);
     }
     if clamped.is_empty() {
-        return Err(c.fail("mesh.clamp", "no clamped node: the problem would be singular"));
+        return Err(c.fail(
+            "mesh.clamp",
+            "no clamped node: the problem would be singular",
+        ));
     }
     let mut obstacles = vec![];
     for (i, o) in raw.obstacle.iter().enumerate() {
         let key = |k: &str| format!("obstacle[{i}].{k}");
         let need = |v: Option<[f64; 3]>, k: &str| {
-            v.map(v3).ok_or_else(|| c.fail(&key(k), format!("missing: required by a `{}` obstacle", o.kind)))
+            v.map(v3).ok_or_else(|| {
+                c.fail(
+                    &key(k),
+                    format!("missing: required by a `{}` obstacle", o.kind),
+                )
+            })
         };
         let ob = match o.kind.as_str() {
             "cylinder" => {
                 let centre = need(o.centre, "centre")?;
                 let axis = need(o.axis, "axis")?;
-                let r = o.radius.ok_or_else(|| c.fail(&key("radius"), "missing: required by a `cylinder` obstacle"))?;
+                let r = o.radius.ok_or_else(|| {
+                    c.fail(&key("radius"), "missing: required by a `cylinder` obstacle")
+                })?;
                 c.positive(&key("radius"), r)?;
-                Obstacle::cylinder(centre, axis, r).ok_or_else(|| c.fail(&key("axis"), "must be a non-zero vector"))?
+                Obstacle::cylinder(centre, axis, r)
+                    .ok_or_else(|| c.fail(&key("axis"), "must be a non-zero vector"))?
             }
             "plane" => {
                 let p = need(o.point, "point")?;
                 let n = need(o.normal, "normal")?;
-                Obstacle::plane(p, n).ok_or_else(|| c.fail(&key("normal"), "must be a non-zero vector"))?
+                Obstacle::plane(p, n)
+                    .ok_or_else(|| c.fail(&key("normal"), "must be a non-zero vector"))?
             }
             other => {
-                return Err(c.fail(&key("type"), format!("unknown obstacle `{other}` (known: cylinder, plane)")));
+                return Err(c.fail(
+                    &key("type"),
+                    format!("unknown obstacle `{other}` (known: cylinder, plane)"),
+                ));
             }
         };
         obstacles.push(ob);
     }
-    let (contact_nodes, contact_k, contact_eta, search_distance) = match (&raw.contact, &raw.mesh.contact) {
-        (Some(ct), Some(group)) => {
-            let nodes = mesh.group(group, path, "mesh.contact")?.to_vec();
-            (
-                nodes,
-                c.positive("contact.k", ct.k)?,
-                c.positive("contact.eta", ct.eta)?,
-                c.positive("contact.search_distance", ct.search_distance)?,
-            )
-        }
-        (None, None) => (vec![], 0.0, 0.0, 0.0),
-        (Some(_), None) => return Err(c.fail("mesh.contact", "missing: [contact] needs the group of candidate nodes")),
-        (None, Some(_)) => return Err(c.fail("contact", "missing: mesh.contact is set but there is no [contact] table")),
-    };
+    let (contact_nodes, contact_k, contact_eta, search_distance) =
+        match (&raw.contact, &raw.mesh.contact) {
+            (Some(ct), Some(group)) => {
+                let nodes = mesh.group(group, path, "mesh.contact")?.to_vec();
+                (
+                    nodes,
+                    c.positive("contact.k", ct.k)?,
+                    c.positive("contact.eta", ct.eta)?,
+                    c.positive("contact.search_distance", ct.search_distance)?,
+                )
+            }
+            (None, None) => (vec![], 0.0, 0.0, 0.0),
+            (Some(_), None) => {
+                return Err(c.fail(
+                    "mesh.contact",
+                    "missing: [contact] needs the group of candidate nodes",
+                ));
+            }
+            (None, Some(_)) => {
+                return Err(c.fail(
+                    "contact",
+                    "missing: mesh.contact is set but there is no [contact] table",
+                ));
+            }
+        };
     if !contact_nodes.is_empty() && obstacles.is_empty() {
-        return Err(c.fail("obstacle", "missing: [contact] needs at least one [[obstacle]]"));
+        return Err(c.fail(
+            "obstacle",
+            "missing: [contact] needs at least one [[obstacle]]",
+        ));
     }
     let mut loads = vec![];
     for (i, l) in raw.load.iter().enumerate() {
@@ -310,7 +342,12 @@ pub fn load(path: &Path) -> Result<ShellScene> {
                     loads.push(PointLoad { node, force });
                 }
             }
-            _ => return Err(c.fail(&format!("load[{i}]"), "give exactly one of `point` or `group`")),
+            _ => {
+                return Err(c.fail(
+                    &format!("load[{i}]"),
+                    "give exactly one of `point` or `group`",
+                ));
+            }
         }
     }
     if loads.is_empty() {
@@ -334,11 +371,16 @@ pub fn load(path: &Path) -> Result<ShellScene> {
     let o = &raw.output;
     let lambda_step = c.positive("output.lambda_step", o.lambda_step)?;
     let probe = mesh.node_at(&v3(o.probe), tol).ok_or_else(|| {
-        c.fail("output.probe", format!("({:?}) is not a node of {}", o.probe, mesh.file.display()))
+        c.fail(
+            "output.probe",
+            format!("({:?}) is not a node of {}", o.probe, mesh.file.display()),
+        )
     })?;
     let mut rows: [Vec<usize>; 3] = Default::default();
     for (k, &x) in o.contact_rows.iter().enumerate() {
-        rows[k] = (0..mesh.nodes.len()).filter(|&n| (mesh.nodes[n][0] - x).abs() <= tol).collect();
+        rows[k] = (0..mesh.nodes.len())
+            .filter(|&n| (mesh.nodes[n][0] - x).abs() <= tol)
+            .collect();
         if rows[k].is_empty() {
             return Err(c.fail(
                 &format!("output.contact_rows[{k}]"),

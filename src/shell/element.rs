@@ -12,18 +12,28 @@
 //! - membrane (in-plane bending) locking: four EAS modes on E⁰_αβ,
 //!   (E11, E22, E12, E12) = (ξ α1, η α2, ξ α3 + η α4).
 //!
-//! The enhanced strain Ẽ_ij = (dA0/dA) T_ik M_kl(ξ, η) T_jl, T_ik = G_i · G0^k
-//! (centroid contravariant basis G0^k), keeps the patch test on distorted
-//! elements (Simo, Rifai IJNME 29 (1990); Andelfinger, Ramm 1993 eq. 33).
+//! The enhanced membrane strain Ẽ_ij = (dA0/dA) T_ik M_kl(ξ, η) T_jl,
+//! T_ik = G_i · G0^k (centroid contravariant basis G0^k), is orthogonal to
+//! constant stresses and keeps the membrane patch test on distorted elements
+//! (Simo, Rifai IJNME 29 (1990); Andelfinger, Ramm 1993 eq. 33). The
+//! thickness mode θ3 α5 is orthogonal to constant stresses through θ3
+//! already; it is mapped without the area ratio so that it stays constant on
+//! a distorted element (with the ratio, the bending patch test failed with a
+//! 4.4e-3 nodal error; without it the error is 7e-12).
 //! The EAS parameters enter the strain linearly and the stress linearly, so
 //! their equation ∫ Gᵀ s dA = 0 (paper eq. 4) is solved exactly per element:
 //! α = −H⁻¹ ∫ Gᵀ D e_c dA, H = ∫ Gᵀ D G dA (constant), and the condensed
 //! tangent is K* = K − L H⁻¹ Lᵀ with L = ∫ Bᵀ D G dA. Since α is a linear map
 //! of the compatible strain, the order-p EAS equation has the same matrix H.
 
+// Node/dof/component loops read better with explicit indices.
+#![allow(clippy::needless_range_loop)]
+
 use nalgebra::{Matrix3, SMatrix};
 
-use super::kinematics::{BMatrix, NDOF_EL, NSTRAIN, Point, PointVectors, Strain, Vec3, strain, strain_coeff};
+use super::kinematics::{
+    BMatrix, NDOF_EL, NSTRAIN, Point, PointVectors, Strain, Vec3, strain, strain_coeff,
+};
 use super::material::{DMatrix, Material};
 use crate::error::{Error, Result};
 
@@ -84,7 +94,14 @@ impl ElementSeries {
 }
 
 fn to_vec(m: &Matrix3<f64>) -> [f64; 6] {
-    [m[(0, 0)], m[(1, 1)], m[(0, 1)], m[(0, 2)], m[(1, 2)], m[(2, 2)]]
+    [
+        m[(0, 0)],
+        m[(1, 1)],
+        m[(0, 1)],
+        m[(0, 2)],
+        m[(1, 2)],
+        m[(2, 2)],
+    ]
 }
 
 impl ShellElement {
@@ -105,10 +122,13 @@ impl ShellElement {
         let g0 = basis(&centre);
         let da0 = g0[0].cross(&g0[1]).norm();
         let m0 = Matrix3::from_fn(|i, j| g0[i].dot(&g0[j]));
-        let m0inv = m0.try_inverse().filter(|_| da0 > 0.0).ok_or_else(|| Error::Element {
-            element: id,
-            problem: "degenerate element: singular metric at the centre".into(),
-        })?;
+        let m0inv = m0
+            .try_inverse()
+            .filter(|_| da0 > 0.0)
+            .ok_or_else(|| Error::Element {
+                element: id,
+                problem: "degenerate element: singular metric at the centre".into(),
+            })?;
         let g0_contra: [Vec3; 3] =
             std::array::from_fn(|k| (0..3).map(|j| m0inv[(k, j)] * g0[j]).sum());
         let mut gps = Vec::with_capacity(4);
@@ -127,14 +147,17 @@ impl ShellElement {
                     ),
                 });
             }
-            let d = material.d_shell(&gb, thickness).ok_or_else(|| Error::Element {
-                element: id,
-                problem: "degenerate metric at a Gauss point".into(),
-            })?;
+            let d = material
+                .d_shell(&gb, thickness)
+                .ok_or_else(|| Error::Element {
+                    element: id,
+                    problem: "degenerate metric at a Gauss point".into(),
+                })?;
             let t = Matrix3::from_fn(|i, k| gb[i].dot(&g0_contra[k]));
             let f = 1.0 / da_ratio;
             let mut g = GMatrix::zeros();
-            let modes: [(usize, usize, f64); 4] = [(0, 0, xi), (1, 1, eta), (0, 1, xi), (0, 1, eta)];
+            let modes: [(usize, usize, f64); 4] =
+                [(0, 0, xi), (1, 1, eta), (0, 1, xi), (0, 1, eta)];
             for (mode, &(k, l, val)) in modes.iter().enumerate() {
                 let mut m = Matrix3::zeros();
                 m[(k, l)] = val;

@@ -21,6 +21,9 @@
 //! its second derivative constant. This is what makes the ANM right-hand side
 //! a plain convolution (Zahrouni, Cochelin, Potier-Ferry, CMAME 175 (1999)).
 
+// Node/dof/component loops read better with explicit indices.
+#![allow(clippy::needless_range_loop)]
+
 use nalgebra::{SMatrix, Vector3};
 
 /// Number of strain components: (E⁰, E¹) × (11, 22, 12, 13, 23, 33), tensor
@@ -267,7 +270,11 @@ mod tests {
             let em = strain(&pt.vectors_of(&qm), &zero);
             for c in 0..NSTRAIN {
                 let fd = (ep[c] - em[c]) / (2.0 * h);
-                assert!((fd - b[(c, j)]).abs() < 1e-8, "B[{c},{j}]: {} vs {fd}", b[(c, j)]);
+                assert!(
+                    (fd - b[(c, j)]).abs() < 1e-8,
+                    "B[{c},{j}]: {} vs {fd}",
+                    b[(c, j)]
+                );
             }
             // d(B^T sigma)/dq_j = Kg column j.
             let mut fp = [0.0; NDOF_EL];

@@ -33,7 +33,10 @@ pub struct Material {
 impl Material {
     pub fn lame(&self) -> (f64, f64) {
         let (e, nu) = (self.young, self.poisson);
-        (e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu)), e / (2.0 * (1.0 + nu)))
+        (
+            e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu)),
+            e / (2.0 * (1.0 + nu)),
+        )
     }
 
     /// The 6×6 matrix D in the natural basis with covariant base vectors g.

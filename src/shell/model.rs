@@ -18,6 +18,9 @@
 //! the Taylor propagation of h, n (obstacle::GapSeries) and R (eq. 3,
 //! NormalLaw::force_coeff), force coefficient Σ_{r=0}^{p} R_r n_{p−r}.
 
+// Node/dof/component loops read better with explicit indices.
+#![allow(clippy::needless_range_loop)]
+
 use super::element::{ElementSeries, ShellElement};
 use super::kinematics::Vec3;
 use super::material::Material;
@@ -148,10 +151,7 @@ impl ShellModel {
 
     /// Free-dof vector to full vector (zeros at fixed dofs).
     pub fn expand(&self, u: &[f64]) -> Vec<f64> {
-        self.free
-            .iter()
-            .map(|f| f.map_or(0.0, |i| u[i]))
-            .collect()
+        self.free.iter().map(|f| f.map_or(0.0, |i| u[i])).collect()
     }
 
     fn reduce(&self, full: &[f64]) -> Vec<f64> {
@@ -174,9 +174,7 @@ impl ShellModel {
     /// Current directors from a full vector.
     pub fn directors(&self, full: &[f64]) -> Vec<Vec3> {
         (0..self.n_nodes())
-            .map(|i| {
-                self.a30[i] + Vec3::new(full[6 * i + 3], full[6 * i + 4], full[6 * i + 5])
-            })
+            .map(|i| self.a30[i] + Vec3::new(full[6 * i + 3], full[6 * i + 4], full[6 * i + 5]))
             .collect()
     }
 
@@ -195,7 +193,11 @@ impl ShellModel {
     }
 
     fn vec3(full: &[f64], node: usize, off: usize) -> Vec3 {
-        Vec3::new(full[6 * node + off], full[6 * node + off + 1], full[6 * node + off + 2])
+        Vec3::new(
+            full[6 * node + off],
+            full[6 * node + off + 1],
+            full[6 * node + off + 2],
+        )
     }
 
     /// Contact reactions of the active pairs at the full state.
@@ -370,7 +372,12 @@ impl ContinuationProblem for ShellModel {
             for i in 0..3 {
                 rl[6 * c.node + 3 + i] -= fw[i];
                 for j in 0..3 {
-                    add(&self.free, 6 * c.node + 3 + i, 6 * c.node + 3 + j, -lambda * mx[i][j]);
+                    add(
+                        &self.free,
+                        6 * c.node + 3 + i,
+                        6 * c.node + 3 + j,
+                        -lambda * mx[i][j],
+                    );
                 }
             }
         }

@@ -52,7 +52,10 @@ pub fn linear(m: &mut ShellModel) -> Vec<f64> {
     let f = SparseLu::new().factorize(&k).expect("factorization");
     let neg: Vec<f64> = rl.iter().map(|x| -x).collect();
     let u = f.solve(&neg);
-    assert!(u.iter().all(|x| x.is_finite()), "non-finite linear solution");
+    assert!(
+        u.iter().all(|x| x.is_finite()),
+        "non-finite linear solution"
+    );
     m.expand(&u)
 }
 
