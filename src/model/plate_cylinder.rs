@@ -257,7 +257,12 @@ pub fn run_loaded(scene: &ShellScene, out_dir: Option<&Path>, progress: bool) ->
                 let u = if (g - step.lambda_end).abs() < 1e-12 {
                     Some(step.u_end.clone())
                 } else {
-                    step.a_at_lambda(g).map(|a| step.eval(a).0)
+                    // The corrected end point stands for grid values within
+                    // 1e-8 of it: bisection on the series cannot find a root
+                    // that the correction moved past the series' own end.
+                    step.a_at_lambda(g).map(|a| step.eval(a).0).or_else(|| {
+                        ((g - step.lambda_end).abs() < 1e-8).then(|| step.u_end.clone())
+                    })
                 };
                 if let Some(u) = u {
                     history.push(probe.row(g, &probe.expand(&u), &active));
