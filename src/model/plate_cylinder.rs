@@ -12,6 +12,8 @@
 //! - `summary.json`: the [`RunReport`] (steps, factorizations, solves, wall
 //!   time, stop reason and lambda);
 //! - `plot.svg`: uz_A and the contact forces versus lambda;
+//! - `contact_final.csv`: per-node gap, reaction R and force R n of the
+//!   active contact nodes at the last point (node numbers 1-based);
 //! - `shell_NNNN.vtu` (deformed mid-surface, displacement, director, nodal
 //!   contact force) every `vtk_every` steps and at the end,
 //!   `obstacle_K.vtu`, and `plate-cylinder.pvd` indexing them by lambda.
@@ -337,6 +339,35 @@ pub fn run_loaded(scene: &ShellScene, out_dir: Option<&Path>, progress: bool) ->
             &d.join("history.csv"),
             &["lambda", "uz_A", "ux_A", "rn_B", "rn_C", "rn_D", "rn_total"],
             &history.iter().map(|r| r.to_vec()).collect::<Vec<_>>(),
+        )?;
+        // Per-node contact forces at the last accepted point.
+        let x = probe.positions(full);
+        let mut rows = vec![];
+        for &ip in active {
+            let p = &probe.pairs[ip];
+            if let Some(g) = probe.obstacles[p.obstacle].gap(&x[p.node]) {
+                let r = p.law.force(g.h);
+                let x0 = probe.x0[p.node];
+                rows.push(vec![
+                    (p.node + 1) as f64,
+                    p.obstacle as f64,
+                    x0[0],
+                    x0[1],
+                    x0[2],
+                    g.h,
+                    r,
+                    r * g.n[0],
+                    r * g.n[1],
+                    r * g.n[2],
+                ]);
+            }
+        }
+        write_csv(
+            &d.join("contact_final.csv"),
+            &[
+                "node", "obstacle", "X", "Y", "Z", "gap", "rn", "fx", "fy", "fz",
+            ],
+            &rows,
         )?;
     }
     let stats = result.stats.clone();
