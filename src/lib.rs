@@ -26,5 +26,6 @@ pub mod output;
 pub mod scene;
 pub mod series;
 pub mod shell;
+pub mod study;
 
 pub use error::{Error, Result};

@@ -30,6 +30,52 @@ enum Command {
     },
     /// Read and validate a scene without solving it.
     Check { scene: PathBuf },
+    /// Sweep regularization parameters (in parallel) and report how much they
+    /// bend the key outputs and what they cost: audit.csv, audit.md, audit.svg.
+    Audit {
+        scene: PathBuf,
+        /// Values of omega (velocity regularization, eq. 6), comma-separated.
+        #[arg(long, value_delimiter = ',')]
+        omega: Vec<f64>,
+        /// Values of zeta (normal-force regularization, eq. 11, N).
+        #[arg(long, value_delimiter = ',')]
+        zeta: Vec<f64>,
+        /// Values of eta (contact regularization, eq. 3, N).
+        #[arg(long, value_delimiter = ',')]
+        eta: Vec<f64>,
+        /// Values of the penalty stiffness K (eq. 3, N/m).
+        #[arg(long, value_delimiter = ',')]
+        penalty: Vec<f64>,
+        #[arg(short, long, value_name = "DIR")]
+        out: PathBuf,
+    },
+    /// Work-precision benchmark: error against wall time per method and
+    /// setting (bench.csv, bench.md, bench.svg). Wall times are medians.
+    Bench {
+        /// Folder holding the canonical scenes.
+        #[arg(long, default_value = "scenes")]
+        scenes: PathBuf,
+        /// Cases to run (comma-separated).
+        #[arg(long, value_delimiter = ',', default_values_t = ["friction-1d".to_string(), "friction-plane".to_string(), "friction-roller".to_string()])]
+        cases: Vec<String>,
+        /// Repetitions per setting (the median time is reported).
+        #[arg(long, default_value_t = 3)]
+        repeat: usize,
+        #[arg(short, long, value_name = "DIR")]
+        out: PathBuf,
+    },
+    /// Stability stress matrix on the friction scenes: every run must meet its
+    /// accuracy check or stop with a diagnosis (stress.md, stress.csv).
+    Stress {
+        /// Folder holding friction-1d.toml, friction-plane.toml, friction-roller.toml.
+        #[arg(long, default_value = "scenes")]
+        scenes: PathBuf,
+        /// Step budget per run.
+        #[arg(long, default_value_t = 20000)]
+        max_steps: usize,
+        #[arg(short, long, value_name = "DIR")]
+        out: PathBuf,
+    },
 }
 
 fn main() -> ExitCode {
@@ -49,6 +95,153 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
             let (kind, _) = load(&scene)?;
             println!("{}: valid `{}` scene", scene.display(), kind.name());
             Ok(ExitCode::SUCCESS)
+        }
+        Command::Audit {
+            scene,
+            omega,
+            zeta,
+            eta,
+            penalty,
+            out,
+        } => {
+            let (kind, friction) = load(&scene)?;
+            let Some(sc) = friction else {
+                anyhow::bail!(
+                    "{}: the audit of `{}` scenes is not available in this build",
+                    scene.display(),
+                    kind.name()
+                );
+            };
+            let sweeps = anm::study::audit::Sweeps {
+                omega,
+                zeta,
+                eta,
+                penalty,
+            };
+            if sweeps.omega.is_empty()
+                && sweeps.zeta.is_empty()
+                && sweeps.eta.is_empty()
+                && sweeps.penalty.is_empty()
+            {
+                anyhow::bail!(
+                    "nothing to sweep: give at least one of --omega, --zeta, --eta, --penalty"
+                );
+            }
+            let rows = anm::study::audit::audit(&sc, &sweeps)?;
+            anm::study::audit::write(&sc, &rows, &out)?;
+            print!("{}", anm::study::audit::markdown(&sc, &rows));
+            println!("\noutputs in {}", out.display());
+            Ok(ExitCode::SUCCESS)
+        }
+        Command::Bench {
+            scenes,
+            cases,
+            repeat,
+            out,
+        } => {
+            use anm::study::bench;
+            let with_ida = cfg!(feature = "reference");
+            let mut rows = vec![];
+            let mut reference_name = String::new();
+            for case in &cases {
+                let (_, sc) = load(&scenes.join(format!("{case}.toml")))?;
+                let Some(sc) = sc else {
+                    anyhow::bail!("bench case `{case}` is not available in this build")
+                };
+                let ref_method = if with_ida {
+                    bench::Method::Ida { rtol: 1e-12 }
+                } else {
+                    bench::Method::Anm {
+                        order: 30,
+                        eps: 1e-14,
+                    }
+                };
+                reference_name = format!("{} {}", ref_method.label(), ref_method.setting());
+                let reference = bench::solve(&sc, &ref_method)?;
+                // friction-roller: compare up to 0.05 s before the breakdown.
+                let anm_ref = bench::solve(
+                    &sc,
+                    &bench::Method::Anm {
+                        order: 30,
+                        eps: 1e-14,
+                    },
+                )?;
+                let t_max = if anm_ref.stop == "singularity" {
+                    anm_ref.t_stop - 0.05
+                } else {
+                    sc.t_end
+                };
+                eprintln!(
+                    "{case}: reference {reference_name}; ANM(30, 1e-14) differs from it by {:.2e} on t <= {t_max:.4}",
+                    bench::error(&anm_ref, &reference, t_max)
+                );
+                let r = bench::work_precision(
+                    case,
+                    &sc,
+                    &bench::friction_methods(with_ida),
+                    &reference,
+                    t_max,
+                    repeat,
+                );
+                print!("{}", bench::markdown(&r, &reference_name));
+                rows.extend(r);
+            }
+            bench::write(&rows, &reference_name, &out)?;
+            println!("outputs in {}", out.display());
+            Ok(ExitCode::SUCCESS)
+        }
+        Command::Stress {
+            scenes,
+            max_steps,
+            out,
+        } => {
+            let mut list = vec![];
+            for name in ["friction-1d", "friction-plane", "friction-roller"] {
+                let path = scenes.join(format!("{name}.toml"));
+                let (_, sc) = load(&path)?;
+                list.push(sc.expect("friction scene"));
+            }
+            let cases =
+                anm::study::stress::stress(&list, &anm::study::stress::full_axes(), max_steps);
+            anm::output::create_dir(&out)?;
+            let md = anm::study::stress::markdown(&cases);
+            std::fs::write(out.join("stress.md"), &md)
+                .with_context(|| format!("writing {}", out.join("stress.md").display()))?;
+            let mut w = csv::Writer::from_path(out.join("stress.csv"))?;
+            w.write_record([
+                "scene",
+                "axis",
+                "value",
+                "verdict",
+                "stop",
+                "steps",
+                "max_relative_residual",
+                "wall_s",
+                "message",
+            ])?;
+            for c in &cases {
+                w.write_record([
+                    c.scene.clone(),
+                    c.axis.to_string(),
+                    format!("{:e}", c.value),
+                    format!("{:?}", c.verdict),
+                    c.stop.clone(),
+                    c.steps.to_string(),
+                    format!("{:e}", c.residual),
+                    format!("{:e}", c.wall_s),
+                    c.message.clone(),
+                ])?;
+            }
+            w.flush()?;
+            print!("{md}");
+            let failed = cases
+                .iter()
+                .any(|c| c.verdict == anm::study::stress::Verdict::Failed);
+            Ok(if failed {
+                ExitCode::FAILURE
+            } else {
+                ExitCode::SUCCESS
+            })
         }
         Command::Run { scene, out, quiet } => {
             let (kind, friction) = load(&scene)?;

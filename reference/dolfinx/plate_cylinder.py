@@ -607,7 +607,8 @@ meta = {
     "parameters": {"E": E_YOUNG, "nu": NU, "length": LENGTH, "width": WIDTH, "thickness": THICK,
                    "cylinder_center_xz": CYL_CENTER.tolist(), "cylinder_radius": CYL_RADIUS,
                    "K": K_PEN, "eta": ETA, "load_per_point_per_lambda": LOAD_PER_POINT,
-                   "candidate_gap_m": args.candidate_gap,
+                   "candidate_gap_m": (args.candidate_gap if np.isfinite(args.candidate_gap)
+                                       else "inf (all mid-surface nodes but the clamped row)"),
                    "contact_threshold_N": args.rn_threshold},
     "command": "/usr/bin/python3 " + " ".join(
         [os.path.relpath(os.path.abspath(sys.argv[0]), os.path.join(here, "..", ".."))]

@@ -1,5 +1,7 @@
 //! Run outputs: CSV curves, summary.json, SVG plots.
 
+#[cfg(feature = "hdf5")]
+pub mod hdf5;
 pub mod plot;
 pub mod vtk;
 

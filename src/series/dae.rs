@@ -219,6 +219,11 @@ impl<P: DaeProblem + ?Sized> Engine<'_, P> {
             }
             let lu = self.factorize(step, t)?;
             let dx = self.solve(&lu, &f);
+            // Converged to roundoff: the Newton step no longer changes the
+            // unknowns (a steep law can keep |F| above an absolute tolerance).
+            if norm(&dx) <= 1e-14 * (norm(vz) + f64::MIN_POSITIVE) && res <= 1e3 * tol {
+                break;
+            }
             // Backtracking on |F|: the friction law is nearly flat away from
             // zero slip, so full Newton steps overshoot.
             let mut damping = 1.0;

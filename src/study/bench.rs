@@ -1,0 +1,331 @@
+//! Work-precision benchmarks: error against wall time for each method and
+//! setting, with the cost counters and the per-step breakdown.
+//!
+//! Error = max over the output grid and the displacement/force columns of
+//! |y - y_ref| / max |y_ref| (per column), against the tightest reference
+//! available: IDA at rtol 1e-12 when built with `--features reference`,
+//! otherwise the ANM at order 30, eps 1e-14 (stated in the table).
+//! Wall times are medians of `repeat` runs. Benchmarks print tables; no test
+//! asserts a time.
+
+use crate::error::Result;
+use crate::model::friction_run::{FrictionRun, run};
+use crate::output::create_dir;
+use crate::output::plot::{Curve, Panel, draw};
+use crate::scene::friction::FrictionScene;
+use crate::series::Stats;
+use std::path::Path;
+
+/// A method and its accuracy setting.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Method {
+    Anm { order: usize, eps: f64 },
+    Ida { rtol: f64 },
+}
+
+impl Method {
+    pub fn label(&self) -> String {
+        match self {
+            Method::Anm { order, .. } => format!("ANM N={order}"),
+            Method::Ida { .. } => "IDA".into(),
+        }
+    }
+    pub fn setting(&self) -> String {
+        match self {
+            Method::Anm { eps, .. } => format!("eps={eps:.0e}"),
+            Method::Ida { rtol } => format!("rtol={rtol:.0e}"),
+        }
+    }
+}
+
+/// A solved case: the history rows on the output grid and the counters.
+pub struct Solution {
+    pub columns: Vec<String>,
+    pub rows: Vec<Vec<f64>>,
+    pub stats: Stats,
+    pub wall_s: f64,
+    pub stop: String,
+    pub t_stop: f64,
+}
+
+impl From<FrictionRun> for Solution {
+    fn from(r: FrictionRun) -> Self {
+        Self {
+            columns: r.columns,
+            rows: r.history,
+            stats: r.stats,
+            wall_s: r.wall_s,
+            stop: r.stop.reason,
+            t_stop: r.stop.t.unwrap_or(f64::NAN),
+        }
+    }
+}
+
+/// Solves a friction scene with a method. IDA needs `--features reference`.
+pub fn solve(scene: &FrictionScene, method: &Method) -> Result<Solution> {
+    match method {
+        Method::Anm { order, eps } => {
+            let mut s = scene.clone();
+            s.order = *order;
+            s.eps = *eps;
+            s.max_steps = s.max_steps.min(2_000_000);
+            Ok(run(&s, None, false)?.into())
+        }
+        Method::Ida { rtol } => ida(scene, *rtol),
+    }
+}
+
+#[cfg(feature = "reference")]
+fn ida(scene: &FrictionScene, rtol: f64) -> Result<Solution> {
+    crate::reference::bench_solution(scene, rtol)
+}
+
+#[cfg(not(feature = "reference"))]
+fn ida(scene: &FrictionScene, _rtol: f64) -> Result<Solution> {
+    Err(crate::Error::Output(format!(
+        "{}: IDA needs a build with `--features reference`",
+        scene.file.display()
+    )))
+}
+
+/// One benchmark row.
+#[derive(Clone, Debug)]
+pub struct BenchRow {
+    pub case: String,
+    pub method: String,
+    pub setting: String,
+    pub error: f64,
+    pub wall_s: f64,
+    pub steps: usize,
+    pub factorizations: usize,
+    pub solves: usize,
+    /// Median seconds per step by part: assembly (Jacobian), factorization,
+    /// solves, series terms (right-hand sides).
+    pub breakdown: [f64; 4],
+    pub stop: String,
+}
+
+/// max over rows (up to `t_max`) and columns of |y - y_ref| / max|y_ref|.
+pub fn error(sol: &Solution, reference: &Solution, t_max: f64) -> f64 {
+    let mut worst: f64 = 0.0;
+    for j in 1..sol.columns.len() {
+        let scale = reference
+            .rows
+            .iter()
+            .map(|r| r[j].abs())
+            .fold(0.0, f64::max)
+            .max(f64::MIN_POSITIVE);
+        for (a, b) in sol.rows.iter().zip(&reference.rows) {
+            if a[0] > t_max + 1e-12 {
+                break;
+            }
+            worst = worst.max((a[j] - b[j]).abs() / scale);
+        }
+    }
+    if sol.rows.len()
+        < reference
+            .rows
+            .iter()
+            .filter(|r| r[0] <= t_max + 1e-12)
+            .count()
+    {
+        return f64::INFINITY;
+    }
+    worst
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+/// Runs every method `repeat` times on the scene and measures its error
+/// against `reference` on t <= t_max.
+pub fn work_precision(
+    case: &str,
+    scene: &FrictionScene,
+    methods: &[Method],
+    reference: &Solution,
+    t_max: f64,
+    repeat: usize,
+) -> Vec<BenchRow> {
+    let mut rows = vec![];
+    for m in methods {
+        let mut walls = vec![];
+        let mut last = None;
+        for _ in 0..repeat.max(1) {
+            match solve(scene, m) {
+                Ok(s) => {
+                    walls.push(s.wall_s);
+                    last = Some(s);
+                }
+                Err(e) => {
+                    last = None;
+                    rows.push(BenchRow {
+                        case: case.into(),
+                        method: m.label(),
+                        setting: m.setting(),
+                        error: f64::NAN,
+                        wall_s: f64::NAN,
+                        steps: 0,
+                        factorizations: 0,
+                        solves: 0,
+                        breakdown: [f64::NAN; 4],
+                        stop: e.kind().into(),
+                    });
+                    break;
+                }
+            }
+        }
+        if let Some(s) = last {
+            let st = &s.stats;
+            let per = |x: f64| x / st.steps.max(1) as f64;
+            rows.push(BenchRow {
+                case: case.into(),
+                method: m.label(),
+                setting: m.setting(),
+                error: error(&s, reference, t_max),
+                wall_s: median(walls),
+                steps: st.steps,
+                factorizations: st.factorizations,
+                solves: st.solves,
+                breakdown: [
+                    per(st.assembly_s),
+                    per(st.factorization_s),
+                    per(st.solve_s),
+                    per(st.series_s),
+                ],
+                stop: s.stop.clone(),
+            });
+        }
+    }
+    rows
+}
+
+pub const HEADER: [&str; 13] = [
+    "case",
+    "method",
+    "setting",
+    "error",
+    "wall_s",
+    "steps",
+    "factorizations",
+    "solves",
+    "assembly_s_per_step",
+    "factorization_s_per_step",
+    "solve_s_per_step",
+    "series_s_per_step",
+    "stop",
+];
+
+pub fn markdown(rows: &[BenchRow], reference_name: &str) -> String {
+    let mut s = format!("Reference: {reference_name}. Wall times are medians.\n\n");
+    s += "| case | method | setting | error | wall (s) | steps | factorizations | solves | per step: assembly / factorization / solves / series (µs) | stop |\n";
+    s += "|---|---|---|---|---|---|---|---|---|---|\n";
+    for r in rows {
+        s += &format!(
+            "| {} | {} | {} | {:.2e} | {:.2e} | {} | {} | {} | {:.1} / {:.1} / {:.1} / {:.1} | {} |\n",
+            r.case,
+            r.method,
+            r.setting,
+            r.error,
+            r.wall_s,
+            r.steps,
+            r.factorizations,
+            r.solves,
+            1e6 * r.breakdown[0],
+            1e6 * r.breakdown[1],
+            1e6 * r.breakdown[2],
+            1e6 * r.breakdown[3],
+            r.stop
+        );
+    }
+    s
+}
+
+/// Writes bench.csv, bench.md and bench.svg (error against wall time).
+pub fn write(rows: &[BenchRow], reference_name: &str, dir: &Path) -> Result<()> {
+    create_dir(dir)?;
+    let mut w = csv::Writer::from_path(dir.join("bench.csv"))
+        .map_err(|e| crate::Error::Output(e.to_string()))?;
+    w.write_record(HEADER)
+        .map_err(|e| crate::Error::Output(e.to_string()))?;
+    for r in rows {
+        let mut rec = vec![r.case.clone(), r.method.clone(), r.setting.clone()];
+        rec.extend([r.error, r.wall_s].map(|x| format!("{x:e}")));
+        rec.extend([r.steps, r.factorizations, r.solves].map(|x| x.to_string()));
+        rec.extend(r.breakdown.map(|x| format!("{x:e}")));
+        rec.push(r.stop.clone());
+        w.write_record(rec)
+            .map_err(|e| crate::Error::Output(e.to_string()))?;
+    }
+    w.flush().map_err(|e| crate::Error::Io {
+        file: dir.join("bench.csv"),
+        source: e,
+    })?;
+    std::fs::write(dir.join("bench.md"), markdown(rows, reference_name)).map_err(|e| {
+        crate::Error::Io {
+            file: dir.join("bench.md"),
+            source: e,
+        }
+    })?;
+    let mut cases: Vec<&str> = rows.iter().map(|r| r.case.as_str()).collect();
+    cases.dedup();
+    let titles: Vec<String> = cases
+        .iter()
+        .map(|c| format!("{c}: error against wall time"))
+        .collect();
+    let panels: Vec<Panel> = cases
+        .iter()
+        .zip(&titles)
+        .map(|(c, title)| {
+            let mut methods: Vec<&str> = rows
+                .iter()
+                .filter(|r| r.case == *c)
+                .map(|r| r.method.as_str())
+                .collect();
+            methods.dedup();
+            Panel {
+                title,
+                x_label: "wall time (s)",
+                y_label: "max relative error",
+                curves: methods
+                    .iter()
+                    .map(|m| Curve {
+                        label: m,
+                        points: rows
+                            .iter()
+                            .filter(|r| r.case == *c && r.method == *m && r.error.is_finite())
+                            .map(|r| (r.wall_s, r.error.max(1e-16)))
+                            .collect(),
+                    })
+                    .collect(),
+                log: (true, true),
+            }
+        })
+        .collect();
+    draw(&dir.join("bench.svg"), &panels)?;
+    Ok(())
+}
+
+/// The friction work-precision matrix of issue 5: ANM orders 5..30 x eps
+/// 1e-3..1e-10, IDA rtol 1e-3..1e-10 (with `--features reference`).
+pub fn friction_methods(with_ida: bool) -> Vec<Method> {
+    let mut m = vec![];
+    for order in [5, 10, 15, 20, 30] {
+        for e in 3..=10 {
+            m.push(Method::Anm {
+                order,
+                eps: 10f64.powi(-e),
+            });
+        }
+    }
+    if with_ida {
+        for e in 3..=10 {
+            m.push(Method::Ida {
+                rtol: 10f64.powi(-e),
+            });
+        }
+    }
+    m
+}
