@@ -180,3 +180,29 @@ fn contact_row_without_nodes_is_rejected() {
     );
     expect_err(load(&s), &["output.contact_rows[1]", "no node row"]);
 }
+
+#[test]
+fn triangle_mesh_is_rejected_with_the_element_type() {
+    let text = std::fs::read_to_string(mesh_path()).unwrap();
+    let mut lines: Vec<String> = text.lines().map(String::from).collect();
+    let i = lines
+        .iter()
+        .position(|l| {
+            let v: Vec<&str> = l.split_whitespace().collect();
+            v.len() == 4 && v[0] == "2" && v[2] == "3"
+        })
+        .unwrap();
+    lines[i] = lines[i].replacen(" 3 ", " 2 ", 1);
+    let p = tmp("triangles.msh");
+    std::fs::write(&p, lines.join("\n") + "\n").unwrap();
+    let s = scene("triangles.toml", &p, &[]);
+    expect_err(
+        load(&s),
+        &[
+            "triangles.msh",
+            &format!(":{}:", i + 1),
+            "type 2",
+            "triangle",
+        ],
+    );
+}

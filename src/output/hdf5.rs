@@ -28,34 +28,61 @@ impl FieldWriter {
     pub fn create(path: &Path, attributes: &[(&str, &str)]) -> Result<Self> {
         let file = hdf5::File::create(path).map_err(|e| err(path, e))?;
         for (name, value) in attributes {
-            let v: hdf5::types::VarLenUnicode = value.parse().map_err(|e| err(path, format!("{e:?}")))?;
+            let v: hdf5::types::VarLenUnicode =
+                value.parse().map_err(|e| err(path, format!("{e:?}")))?;
             file.new_attr::<hdf5::types::VarLenUnicode>()
                 .create(*name)
                 .and_then(|a| a.write_scalar(&v))
                 .map_err(|e| err(path, e))?;
         }
-        Ok(Self { file, path: path.to_path_buf(), next: 0 })
+        Ok(Self {
+            file,
+            path: path.to_path_buf(),
+            next: 0,
+        })
     }
 
     /// Writes a step: scalar attributes and (name, rows x 3) fields given row-major.
     pub fn write_step(&mut self, scalars: &[(&str, f64)], fields: &[(&str, &[f64])]) -> Result<()> {
         let p = self.path.clone();
-        let g = self.file.create_group(&format!("step_{:04}", self.next)).map_err(|e| err(&p, e))?;
+        let g = self
+            .file
+            .create_group(&format!("step_{:04}", self.next))
+            .map_err(|e| err(&p, e))?;
         for (name, value) in scalars {
             if !value.is_finite() {
-                return Err(err(&p, format!("refusing to write non-finite `{name}` = {value}")));
+                return Err(err(
+                    &p,
+                    format!("refusing to write non-finite `{name}` = {value}"),
+                ));
             }
-            g.new_attr::<f64>().create(*name).and_then(|a| a.write_scalar(value)).map_err(|e| err(&p, e))?;
+            g.new_attr::<f64>()
+                .create(*name)
+                .and_then(|a| a.write_scalar(value))
+                .map_err(|e| err(&p, e))?;
         }
         for (name, data) in fields {
             if data.len() % 3 != 0 {
-                return Err(err(&p, format!("field `{name}` has {} values, not rows of 3", data.len())));
+                return Err(err(
+                    &p,
+                    format!("field `{name}` has {} values, not rows of 3", data.len()),
+                ));
             }
             if let Some(bad) = data.iter().position(|x| !x.is_finite()) {
-                return Err(err(&p, format!("refusing to write non-finite `{name}`[{bad}] = {}", data[bad])));
+                return Err(err(
+                    &p,
+                    format!(
+                        "refusing to write non-finite `{name}`[{bad}] = {}",
+                        data[bad]
+                    ),
+                ));
             }
-            let arr = ndarray::Array2::from_shape_vec((data.len() / 3, 3), data.to_vec()).map_err(|e| err(&p, e))?;
-            g.new_dataset_builder().with_data(&arr).create(*name).map_err(|e| err(&p, e))?;
+            let arr = ndarray::Array2::from_shape_vec((data.len() / 3, 3), data.to_vec())
+                .map_err(|e| err(&p, e))?;
+            g.new_dataset_builder()
+                .with_data(&arr)
+                .create(*name)
+                .map_err(|e| err(&p, e))?;
         }
         self.next += 1;
         Ok(())
