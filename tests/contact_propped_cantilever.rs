@@ -63,3 +63,33 @@ fn tip_reaction_on_a_plane_matches_the_propped_cantilever() {
     );
     assert!((wz + g).abs() <= 1e-3 * g, "tip deflection {wz} vs -g");
 }
+
+/// A node that reaches its obstacle within one step while outside the search
+/// distance stops the run with a diagnosis instead of passing through.
+#[test]
+fn contact_outside_the_search_distance_is_diagnosed() {
+    let mesh = structured::rectangle(0.0, 1.0, -0.05, 0.05, 40, 1);
+    let mut m = shell_common::model(&mesh, 0.01, 2e9, 0.0);
+    let mut fixed = vec![];
+    shell_common::fix(&mut fixed, &mesh.groups["s0"], &[0, 1, 2, 3, 4, 5]);
+    m.set_constraints(&fixed);
+    let tip = mesh.groups["s1"].clone();
+    for &n in &tip {
+        m.dead[6 * n + 2] = -0.5;
+    }
+    let plane = Obstacle::plane(Vec3::new(0.0, 0.0, -1e-2), Vec3::z()).unwrap();
+    // Search distance below the initial gap: the tip starts inactive.
+    m.set_contact(vec![plane], &tip, 1e9, 1e-6, 5e-3).unwrap();
+    let cfg = ContinuationConfig {
+        order: 15,
+        eps: 1e-8,
+        lambda_end: 1.0,
+        ..Default::default()
+    };
+    let n0 = anm::series::ContinuationProblem::ndof(&m);
+    let res = run(&mut m, vec![0.0; n0], 0.0, &cfg, |_, _| Ok(()));
+    let e = res.error.expect("the missed contact must stop the run");
+    println!("{e}");
+    assert_eq!(e.kind(), "contact_missed", "{e}");
+    assert!(e.to_string().contains("search_distance"));
+}

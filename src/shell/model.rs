@@ -277,6 +277,39 @@ impl ShellModel {
         self.active = search::active(&self.pairs, &x, &self.obstacles, self.search_distance);
     }
 
+    /// The active set is frozen during a step: a candidate left out at the
+    /// step start must not come within half the search distance of its
+    /// obstacle before the next refresh, or its contact term would be
+    /// missing (error, with the advice to enlarge the search distance).
+    fn check_inactive(&self, full: &[f64], lambda: f64) -> Result<()> {
+        if self.pairs.len() == self.active.len() {
+            return Ok(());
+        }
+        let mut is_active = vec![false; self.pairs.len()];
+        for &i in &self.active {
+            is_active[i] = true;
+        }
+        for (i, p) in self.pairs.iter().enumerate() {
+            if is_active[i] {
+                continue;
+            }
+            let x = self.x0[p.node] + Self::vec3(full, p.node, 0);
+            if let Some(g) = self.obstacles[p.obstacle].gap(&x) {
+                if g.h < 0.5 * self.search_distance {
+                    return Err(Error::ContactMissed {
+                        param: "lambda",
+                        at: lambda,
+                        node: p.node + 1,
+                        obstacle: p.obstacle,
+                        gap: g.h,
+                        distance: self.search_distance,
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
+
     pub fn active_pairs(&self) -> &[usize] {
         &self.active
     }
@@ -333,6 +366,7 @@ impl ContinuationProblem for ShellModel {
 
     fn residual(&mut self, u: &[f64], lambda: f64) -> Result<Vec<f64>> {
         let full = self.expand(u);
+        self.check_inactive(&full, lambda)?;
         let r = self.residual_full(&full, lambda)?;
         Self::check_finite(&r, lambda, "residual")?;
         Ok(self.reduce(&r))
