@@ -294,17 +294,17 @@ impl ShellModel {
                 continue;
             }
             let x = self.x0[p.node] + Self::vec3(full, p.node, 0);
-            if let Some(g) = self.obstacles[p.obstacle].gap(&x) {
-                if g.h < 0.5 * self.search_distance {
-                    return Err(Error::ContactMissed {
-                        param: "lambda",
-                        at: lambda,
-                        node: p.node + 1,
-                        obstacle: p.obstacle,
-                        gap: g.h,
-                        distance: self.search_distance,
-                    });
-                }
+            if let Some(g) = self.obstacles[p.obstacle].gap(&x)
+                && g.h < 0.5 * self.search_distance
+            {
+                return Err(Error::ContactMissed {
+                    param: "lambda",
+                    at: lambda,
+                    node: p.node + 1,
+                    obstacle: p.obstacle,
+                    gap: g.h,
+                    distance: self.search_distance,
+                });
             }
         }
         Ok(())
