@@ -62,6 +62,17 @@ pub enum Error {
     },
     #[error("{0}")]
     Output(String),
+    #[error(
+        "{param} = {at:.9e}: contact node {node} came to {gap:.3e} m of obstacle {obstacle} within one step while outside the search distance {distance:.3e} m (increase contact.search_distance)"
+    )]
+    ContactMissed {
+        param: &'static str,
+        at: f64,
+        node: usize,
+        obstacle: usize,
+        gap: f64,
+        distance: f64,
+    },
 }
 
 impl Error {
@@ -78,6 +89,7 @@ impl Error {
             Error::NonFinite { .. } => "non_finite",
             Error::StepCollapse { .. } => "step_collapse",
             Error::Output(_) => "output",
+            Error::ContactMissed { .. } => "contact_missed",
         }
     }
 }

@@ -1,8 +1,12 @@
-//! Contact with rigid obstacles: the regularized normal law (paper eq. 3) and
-//! the regularized power friction law (eqs. 5, 6, 11).
+//! Contact with rigid obstacles: the regularized normal law (paper eq. 3),
+//! the regularized power friction law (eqs. 5, 6, 11), analytic obstacles
+//! (gap and normal) and the contact candidate search.
 
 pub mod friction;
 pub mod normal;
+pub mod obstacle;
+pub mod search;
 
 pub use friction::FrictionLaw;
 pub use normal::NormalLaw;
+pub use obstacle::Obstacle;

@@ -1,1 +1,141 @@
 //! Meshes, node sets and the gmsh .msh 4.1 reader.
+//!
+//! A [`Mesh`] is a quadrilateral surface mesh: node positions, 4-node
+//! elements, named node sets (gmsh physical groups) and, when the geometry is
+//! known exactly (built-in meshers), the exact unit normals used as reference
+//! directors; otherwise the directors are the averaged element normals.
+
+pub mod gmsh;
+pub mod structured;
+
+use crate::error::{Error, Result};
+use nalgebra::Vector3;
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+
+pub type Vec3 = Vector3<f64>;
+
+#[derive(Clone, Debug)]
+pub struct Mesh {
+    /// Source file (or a `<built-in ...>` label) for error messages.
+    pub file: PathBuf,
+    pub nodes: Vec<Vec3>,
+    pub quads: Vec<[usize; 4]>,
+    /// Line of each element in the source file (0 for built-in meshes).
+    pub quad_lines: Vec<usize>,
+    /// Element tags as in the source file (1-based index for built-in).
+    pub quad_tags: Vec<usize>,
+    /// Exact unit normals, when known.
+    pub exact_normals: Option<Vec<Vec3>>,
+    /// Node sets by name (sorted, unique).
+    pub groups: BTreeMap<String, Vec<usize>>,
+}
+
+impl Mesh {
+    /// The node set `name`; the error names the mesh file, the scene key that
+    /// asked for it, and the groups that exist.
+    pub fn group(&self, name: &str, scene: &std::path::Path, key: &str) -> Result<&[usize]> {
+        self.groups
+            .get(name)
+            .map(|v| v.as_slice())
+            .ok_or_else(|| Error::Invalid {
+                file: scene.to_path_buf(),
+                key: key.to_string(),
+                problem: format!(
+                    "physical group `{name}` not found in mesh {} (it has: {})",
+                    self.file.display(),
+                    self.groups.keys().cloned().collect::<Vec<_>>().join(", ")
+                ),
+            })
+    }
+
+    /// The node within `tol` of `p`, if any (the nearest one).
+    pub fn node_at(&self, p: &Vec3, tol: f64) -> Option<usize> {
+        let (i, d) = self
+            .nodes
+            .iter()
+            .enumerate()
+            .map(|(i, x)| (i, (x - p).norm()))
+            .min_by(|a, b| a.1.total_cmp(&b.1))?;
+        (d <= tol).then_some(i)
+    }
+
+    /// Characteristic size: the largest bounding-box extent.
+    pub fn size(&self) -> f64 {
+        let mut lo = Vec3::repeat(f64::INFINITY);
+        let mut hi = Vec3::repeat(f64::NEG_INFINITY);
+        for x in &self.nodes {
+            lo = lo.inf(x);
+            hi = hi.sup(x);
+        }
+        (hi - lo).max()
+    }
+
+    fn element_error(&self, e: usize, problem: String) -> Error {
+        Error::Mesh {
+            file: self.file.clone(),
+            line: self.quad_lines[e],
+            problem: format!("element {}: {problem}", self.quad_tags[e]),
+        }
+    }
+
+    /// Checks every element and returns the reference unit directors: exact
+    /// normals if known, else the average of the normals of the elements
+    /// around each node. Errors: degenerate elements (zero area, repeated
+    /// nodes), non-convex or self-crossing ones (a corner Jacobian of the
+    /// wrong sign) and elements whose orientation is opposite to their
+    /// neighbours' (inverted).
+    pub fn directors(&self) -> Result<Vec<Vec3>> {
+        let mut avg = vec![Vec3::zeros(); self.nodes.len()];
+        let mut normals = Vec::with_capacity(self.quads.len());
+        for (e, q) in self.quads.iter().enumerate() {
+            let x: [Vec3; 4] = std::array::from_fn(|i| self.nodes[q[i]]);
+            let n = (x[2] - x[0]).cross(&(x[3] - x[1]));
+            let scale = (x[2] - x[0]).norm() * (x[3] - x[1]).norm();
+            if !(n.norm() > 1e-10 * scale) || scale == 0.0 {
+                return Err(self.element_error(e, "degenerate element (zero area)".into()));
+            }
+            let nh = n.normalize();
+            for i in 0..4 {
+                let a = x[(i + 1) % 4] - x[i];
+                let b = x[(i + 3) % 4] - x[i];
+                let j = a.cross(&b).dot(&nh);
+                if !(j > 1e-8 * a.norm() * b.norm()) {
+                    return Err(self.element_error(
+                        e,
+                        format!(
+                            "inverted or degenerate element: corner {} (node {}) has Jacobian {j:.3e}",
+                            i + 1,
+                            q[i] + 1
+                        ),
+                    ));
+                }
+            }
+            for &node in q {
+                avg[node] += nh;
+            }
+            normals.push(nh);
+        }
+        let dirs: Vec<Vec3> = match &self.exact_normals {
+            Some(n) => n.clone(),
+            None => avg
+                .iter()
+                .map(|a| a.try_normalize(0.0).unwrap_or(Vec3::z()))
+                .collect(),
+        };
+        for (e, q) in self.quads.iter().enumerate() {
+            for &node in q {
+                if !(normals[e].dot(&dirs[node]) > 0.0) {
+                    return Err(self.element_error(
+                        e,
+                        format!(
+                            "inverted element: its normal is opposite to the director at node {} (inconsistent orientation)",
+                            node + 1
+                        ),
+                    ));
+                }
+            }
+        }
+        Ok(dirs)
+    }
+}

@@ -2,3 +2,4 @@
 
 pub mod friction;
 pub mod friction_run;
+pub mod plate_cylinder;

@@ -3,6 +3,7 @@
 #[cfg(feature = "hdf5")]
 pub mod hdf5;
 pub mod plot;
+pub mod vtk;
 
 use crate::error::{Error, Result};
 use serde::Serialize;

@@ -4,6 +4,7 @@
 //! schema. Errors name the file, the key (`table.key`) and the problem.
 
 pub mod friction;
+pub mod shell;
 
 use crate::error::{Error, Result};
 use std::path::{Path, PathBuf};

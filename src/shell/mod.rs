@@ -1,1 +1,13 @@
-//! 3D shell element with EAS (quadratic kinematics), quadrature.
+//! 3D shell with a director-difference vector, EAS and ANS (DESIGN §3): the
+//! kinematics (strain exactly quadratic in the unknowns), the 3D St
+//! Venant–Kirchhoff law, the 4-node element, and the assembled model that the
+//! ANM engine continues.
+
+pub mod element;
+pub mod kinematics;
+pub mod material;
+pub mod model;
+
+pub use element::ShellElement;
+pub use material::Material;
+pub use model::{FollowerCouple, ShellModel};

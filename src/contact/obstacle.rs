@@ -1,0 +1,242 @@
+//! Rigid analytic obstacles: gap h and outward normal n of a point x.
+//!
+//! - plane through p with unit normal n: h = (x − p)·n, n constant;
+//! - cylinder of centre c, unit axis a, radius r: with P = I − a aᵀ and
+//!   y = P (x − c), d = |y|, h = d − r, n = y / d, dn/dx = (P − n nᵀ) / d.
+//!
+//! n points from the obstacle toward the point; the reaction R of eq. (3)
+//! acts on the point as R n. The gap is written as a function of x only;
+//! a moving or rotating obstacle (next issues) enters through the map
+//! x ↦ (c(t), a(t)) or (p(t), n(t)), which this layout keeps separate.
+//!
+//! Along an ANM series x(a) = Σ x_p a^p the gap of a cylinder is not
+//! polynomial; [`GapSeries`] propagates d² = y·y, d = sqrt(d²) and n = y / d
+//! coefficient by coefficient (crate::series::taylor), O(p) per order.
+
+// Node/dof/component loops read better with explicit indices.
+#![allow(clippy::needless_range_loop)]
+
+use crate::series::taylor::{div_coeff, sqrt_coeff};
+use nalgebra::{Matrix3, Vector3};
+
+pub type Vec3 = Vector3<f64>;
+
+#[derive(Clone, Debug, PartialEq)]
+pub enum Obstacle {
+    Plane {
+        point: Vec3,
+        normal: Vec3,
+    },
+    Cylinder {
+        centre: Vec3,
+        axis: Vec3,
+        radius: f64,
+    },
+}
+
+/// Gap, normal and normal derivative at a point.
+#[derive(Clone, Copy, Debug)]
+pub struct Gap {
+    pub h: f64,
+    pub n: Vec3,
+    /// dn/dx.
+    pub dn: Matrix3<f64>,
+}
+
+impl Obstacle {
+    /// A plane; `normal` is normalized. None if it is zero.
+    pub fn plane(point: Vec3, normal: Vec3) -> Option<Self> {
+        let n = normal.try_normalize(0.0)?;
+        Some(Obstacle::Plane { point, normal: n })
+    }
+
+    /// A cylinder; `axis` is normalized. None if it is zero or radius <= 0.
+    pub fn cylinder(centre: Vec3, axis: Vec3, radius: f64) -> Option<Self> {
+        let a = axis.try_normalize(0.0)?;
+        (radius > 0.0 && radius.is_finite()).then_some(Obstacle::Cylinder {
+            centre,
+            axis: a,
+            radius,
+        })
+    }
+
+    /// Gap and normal at x. None where the normal is undefined (a point on
+    /// the cylinder axis).
+    pub fn gap(&self, x: &Vec3) -> Option<Gap> {
+        match self {
+            Obstacle::Plane { point, normal } => Some(Gap {
+                h: (x - point).dot(normal),
+                n: *normal,
+                dn: Matrix3::zeros(),
+            }),
+            Obstacle::Cylinder {
+                centre,
+                axis,
+                radius,
+            } => {
+                let p = Matrix3::identity() - axis * axis.transpose();
+                let y = p * (x - centre);
+                let d = y.norm();
+                if d <= 1e-12 * radius {
+                    return None;
+                }
+                let n = y / d;
+                Some(Gap {
+                    h: d - radius,
+                    n,
+                    dn: (p - n * n.transpose()) / d,
+                })
+            }
+        }
+    }
+}
+
+/// Series of the gap and normal of one point along an ANM step.
+#[derive(Clone, Debug)]
+pub struct GapSeries {
+    obstacle_kind: Kind,
+    /// y_r (cylinder: P x_r shifted; plane: x_r).
+    y: Vec<Vec3>,
+    d2: Vec<f64>,
+    d: Vec<f64>,
+    n: [Vec<f64>; 3],
+    /// h_r.
+    pub h: Vec<f64>,
+}
+
+#[derive(Clone, Debug)]
+enum Kind {
+    Plane(Vec3, Vec3),
+    Cylinder(Matrix3<f64>, Vec3),
+}
+
+impl GapSeries {
+    /// Order 0 at position x0. None where the gap is undefined.
+    pub fn start(obstacle: &Obstacle, x0: &Vec3) -> Option<Self> {
+        let g = obstacle.gap(x0)?;
+        let kind = match obstacle {
+            Obstacle::Plane { point, normal } => Kind::Plane(*point, *normal),
+            Obstacle::Cylinder { centre, axis, .. } => {
+                Kind::Cylinder(Matrix3::identity() - axis * axis.transpose(), *centre)
+            }
+        };
+        let y0 = match &kind {
+            Kind::Plane(p, _) => x0 - p,
+            Kind::Cylinder(pm, c) => pm * (x0 - c),
+        };
+        let d = y0.norm();
+        Some(Self {
+            obstacle_kind: kind,
+            y: vec![y0],
+            d2: vec![d * d],
+            d: vec![d],
+            n: [vec![g.n[0]], vec![g.n[1]], vec![g.n[2]]],
+            h: vec![g.h],
+        })
+    }
+
+    pub fn orders(&self) -> usize {
+        self.y.len()
+    }
+
+    /// Order-p coefficients (h_p, n_p) given x_p; pushes them if `keep`.
+    fn order(&mut self, xp: &Vec3, keep: bool) -> (f64, Vec3) {
+        let p = self.y.len();
+        match self.obstacle_kind.clone() {
+            Kind::Plane(_, nrm) => {
+                let hp = xp.dot(&nrm);
+                if keep {
+                    self.y.push(*xp);
+                    self.d2.push(0.0);
+                    self.d.push(0.0);
+                    for k in 0..3 {
+                        self.n[k].push(0.0);
+                    }
+                    self.h.push(hp);
+                }
+                (hp, Vec3::zeros())
+            }
+            Kind::Cylinder(pm, _) => {
+                let yp = pm * xp;
+                self.y.push(yp);
+                let d2p: f64 = (0..=p).map(|r| self.y[r].dot(&self.y[p - r])).sum();
+                self.d2.push(d2p);
+                let dp = sqrt_coeff(&self.d2, &self.d, p);
+                self.d.push(dp);
+                let mut np = Vec3::zeros();
+                for k in 0..3 {
+                    let yk: Vec<f64> = self.y.iter().map(|v| v[k]).collect();
+                    np[k] = div_coeff(&yk, &self.d, &self.n[k], p);
+                }
+                if keep {
+                    for k in 0..3 {
+                        self.n[k].push(np[k]);
+                    }
+                    self.h.push(dp);
+                } else {
+                    self.y.pop();
+                    self.d2.pop();
+                    self.d.pop();
+                }
+                (dp, np)
+            }
+        }
+    }
+
+    /// Completes order p = orders() from the point's order-p increment.
+    pub fn complete(&mut self, xp: &Vec3) -> (f64, Vec3) {
+        self.order(xp, true)
+    }
+
+    /// Order p = orders() with x_p = 0 (not stored).
+    pub fn starred(&mut self) -> (f64, Vec3) {
+        self.order(&Vec3::zeros(), false)
+    }
+
+    /// n_r.
+    pub fn normal(&self, r: usize) -> Vec3 {
+        Vec3::new(self.n[0][r], self.n[1][r], self.n[2][r])
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn cylinder_gap_normal_and_series_match_direct_evaluation() {
+        let cyl =
+            Obstacle::cylinder(Vec3::new(1.0, 0.0, 0.5001), Vec3::new(0.0, 2.0, 0.0), 0.5).unwrap();
+        let g = cyl.gap(&Vec3::new(1.0, 0.3, 0.0)).unwrap();
+        assert!((g.h - 1e-4).abs() < 1e-15 && (g.n - Vec3::new(0.0, 0.0, -1.0)).norm() < 1e-15);
+        // dn/dx against central differences.
+        let x = Vec3::new(1.3, 0.1, 0.2);
+        let g = cyl.gap(&x).unwrap();
+        for j in 0..3 {
+            let mut e = Vec3::zeros();
+            e[j] = 1e-6;
+            let fd = (cyl.gap(&(x + e)).unwrap().n - cyl.gap(&(x - e)).unwrap().n) / 2e-6;
+            assert!((fd - g.dn.column(j)).norm() < 1e-8);
+        }
+        // Series along x(a) = x0 + x1 a + x2 a^2.
+        let xs = [x, Vec3::new(0.3, -0.2, 0.5), Vec3::new(-0.1, 0.4, 0.2)];
+        let mut s = GapSeries::start(&cyl, &xs[0]).unwrap();
+        for p in 1..=20 {
+            let xp = if p < 3 { xs[p] } else { Vec3::zeros() };
+            let (hs, ns) = s.clone().starred();
+            let (h, n) = s.complete(&xp);
+            if p >= 3 {
+                assert_eq!((hs, ns), (h, n));
+            }
+        }
+        let a: f64 = 0.1;
+        let xa = xs[0] + xs[1] * a + xs[2] * a * a;
+        let ga = cyl.gap(&xa).unwrap();
+        let h: f64 = s.h.iter().rev().fold(0.0, |acc, c| acc * a + c);
+        let n: Vec3 = (0..s.orders())
+            .rev()
+            .fold(Vec3::zeros(), |acc, r| acc * a + s.normal(r));
+        assert!((h - ga.h).abs() < 1e-13, "{h} vs {}", ga.h);
+        assert!((n - ga.n).norm() < 1e-13);
+    }
+}

@@ -1,0 +1,444 @@
+//! The plate-cylinder case (paper §2.2, DESIGN §4): a clamped strip pushed
+//! by dead end forces around a fixed rigid cylinder, frictionless contact by
+//! the regularized law (eq. 3), ANM continuation in lambda.
+//!
+//! [`run_scene`] reads the scene, builds the shell model, follows the path
+//! and writes, in the output directory:
+//! - `history.csv`: `lambda,uz_A,ux_A,rn_B,rn_C,rn_D,rn_total` on the uniform
+//!   lambda grid of the scene, each row evaluated from the series of the step
+//!   that contains it (PathStep::a_at_lambda + eval); rn_B, rn_C, rn_D are the
+//!   sums of the nodal normal reactions R over the node rows at the scene's
+//!   `contact_rows` x, rn_total over all contact nodes;
+//! - `summary.json`: the [`RunReport`] (steps, factorizations, solves, wall
+//!   time, stop reason and lambda);
+//! - `plot.svg`: uz_A and the contact forces versus lambda;
+//! - `contact_final.csv`: per-node gap, reaction R and force R n of the
+//!   active contact nodes at the last point (node numbers 1-based);
+//! - `shell_NNNN.vtu` (deformed mid-surface, displacement, director, nodal
+//!   contact force) every `vtk_every` steps and at the end,
+//!   `obstacle_K.vtu`, and `plate-cylinder.pvd` indexing them by lambda.
+
+use crate::contact::Obstacle;
+use crate::contact::search;
+use crate::error::Result;
+use crate::mesh::Vec3;
+use crate::output::plot::{Curve, Panel, draw};
+use crate::output::vtk::{PointData, cylinder_surface, write_pvd, write_vtu};
+use crate::output::{Stop, create_dir, write_csv, write_json};
+use crate::scene::shell::{ShellScene, load};
+use crate::series::continuation::{PathStep, run};
+use crate::series::{ContinuationProblem, Stats};
+use crate::shell::ShellModel;
+use serde::Serialize;
+use std::path::Path;
+use std::time::Instant;
+
+/// Summary of a run (summary.json).
+#[derive(Clone, Debug, Serialize)]
+pub struct RunReport {
+    pub scene: String,
+    pub mesh: String,
+    pub nodes: usize,
+    pub elements: usize,
+    pub dofs: usize,
+    pub contact_candidates: usize,
+    pub steps: usize,
+    pub factorizations: usize,
+    pub solves: usize,
+    pub corrections: usize,
+    pub wall_s: f64,
+    pub stats: Stats,
+    pub stop: Stop,
+    /// uz at the probe at the last accepted point.
+    pub uz_a_end: f64,
+    /// Largest sum of the pulls (eta per node, DESIGN §3) of the candidate
+    /// nodes left out of the active set, over all steps (N).
+    pub skipped_pull_bound: f64,
+    /// history.csv rows: lambda, uz_A, ux_A, rn_B, rn_C, rn_D, rn_total.
+    #[serde(skip)]
+    pub history: Vec<[f64; 7]>,
+}
+
+impl RunReport {
+    /// uz_A at a grid value of lambda (nearest row within 1e-9).
+    pub fn uz_at(&self, lambda: f64) -> Option<f64> {
+        self.history
+            .iter()
+            .find(|r| (r[0] - lambda).abs() < 1e-9)
+            .map(|r| r[1])
+    }
+}
+
+/// Builds the shell model of a scene: elements, clamps, loads, contact.
+pub fn build_model(scene: &ShellScene) -> Result<ShellModel> {
+    let mut m = ShellModel::new(
+        scene.mesh.nodes.clone(),
+        scene.directors.clone(),
+        &scene.mesh.quads,
+        scene.thickness,
+        scene.material,
+    )
+    .map_err(|e| match e {
+        crate::Error::Element { element, problem } => crate::Error::Mesh {
+            file: scene.mesh.file.clone(),
+            line: scene.mesh.quad_lines[element],
+            problem: format!("element {}: {problem}", scene.mesh.quad_tags[element]),
+        },
+        other => other,
+    })?;
+    let fixed: Vec<(usize, usize)> = scene
+        .clamped
+        .iter()
+        .flat_map(|&n| (0..6).map(move |k| (n, k)))
+        .collect();
+    m.set_constraints(&fixed);
+    for l in &scene.loads {
+        for k in 0..3 {
+            m.dead[6 * l.node + k] += l.force[k];
+        }
+    }
+    if !scene.contact_nodes.is_empty() {
+        m.set_contact(
+            scene.obstacles.clone(),
+            &scene.contact_nodes,
+            scene.contact_k,
+            scene.contact_eta,
+            scene.search_distance,
+        )
+        .map_err(|(node, ob, h0)| crate::Error::Invalid {
+            file: scene.file.clone(),
+            key: format!("obstacle[{ob}]"),
+            problem: format!(
+                "contact node {} at {:?} has initial gap {h0:e}: eq. (3) needs delta = h0 > 0",
+                node + 1,
+                scene.mesh.nodes[node].as_slice()
+            ),
+        })?;
+    }
+    Ok(m)
+}
+
+/// Runs a plate-cylinder scene file and writes the outputs into `out_dir`.
+pub fn run_scene(scene_path: &Path, out_dir: &Path, progress: bool) -> Result<RunReport> {
+    let scene = load(scene_path)?;
+    run_loaded(&scene, Some(out_dir), progress)
+}
+
+/// Outputs evaluated from a state: what history.csv and the VTK files need.
+struct Probe<'a> {
+    scene: &'a ShellScene,
+    x0: Vec<Vec3>,
+    free: Vec<Option<usize>>,
+    pairs: Vec<search::ContactPair>,
+    obstacles: Vec<Obstacle>,
+    distance: f64,
+}
+
+impl Probe<'_> {
+    fn expand(&self, u: &[f64]) -> Vec<f64> {
+        self.free.iter().map(|f| f.map_or(0.0, |i| u[i])).collect()
+    }
+
+    fn positions(&self, full: &[f64]) -> Vec<Vec3> {
+        (0..self.x0.len())
+            .map(|i| self.x0[i] + Vec3::new(full[6 * i], full[6 * i + 1], full[6 * i + 2]))
+            .collect()
+    }
+
+    /// Per-node reaction R and force R n for the active pairs.
+    fn reactions(&self, full: &[f64], active: &[usize]) -> (Vec<f64>, Vec<Vec3>) {
+        let x = self.positions(full);
+        let mut r = vec![0.0; self.x0.len()];
+        let mut f = vec![Vec3::zeros(); self.x0.len()];
+        for &ip in active {
+            let p = &self.pairs[ip];
+            if let Some(g) = self.obstacles[p.obstacle].gap(&x[p.node]) {
+                let rn = p.law.force(g.h);
+                r[p.node] += rn;
+                f[p.node] += g.n * rn;
+            }
+        }
+        (r, f)
+    }
+
+    fn row(&self, lambda: f64, full: &[f64], active: &[usize]) -> [f64; 7] {
+        let (r, _) = self.reactions(full, active);
+        let a = self.scene.probe;
+        let sum = |rows: &[usize]| rows.iter().map(|&n| r[n]).sum::<f64>();
+        [
+            lambda,
+            full[6 * a + 2],
+            full[6 * a],
+            sum(&self.scene.rows[0]),
+            sum(&self.scene.rows[1]),
+            sum(&self.scene.rows[2]),
+            r.iter().sum(),
+        ]
+    }
+}
+
+/// Runs a loaded scene; `out_dir` None writes nothing (tests).
+pub fn run_loaded(scene: &ShellScene, out_dir: Option<&Path>, progress: bool) -> Result<RunReport> {
+    let start = Instant::now();
+    let mut model = build_model(scene)?;
+    if let Some(d) = out_dir {
+        create_dir(d)?;
+    }
+    let probe = Probe {
+        scene,
+        x0: model.x0.clone(),
+        free: model.free.clone(),
+        pairs: model.pairs.clone(),
+        obstacles: model.obstacles.clone(),
+        distance: model.search_distance,
+    };
+    let n_dof = model.ndof();
+    let cfg = scene.solver.clone();
+    let bar = progress.then(|| {
+        let b = indicatif::ProgressBar::new(1000);
+        b.set_style(
+            indicatif::ProgressStyle::with_template("{bar:40} {percent:>3}% {msg}")
+                .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+        );
+        b
+    });
+    let mut history: Vec<[f64; 7]> = vec![];
+    let mut next_grid = 0usize;
+    let mut pvd: Vec<(f64, usize, String)> = vec![];
+    let mut pull_bound = 0.0f64;
+    let mut last: Option<(Vec<f64>, f64, Vec<usize>)> = None;
+    let write_shell = |file: &str, full: &[f64], active: &[usize]| -> Result<()> {
+        let Some(d) = out_dir else { return Ok(()) };
+        let x = probe.positions(full);
+        let n = x.len();
+        let disp: Vec<Vec3> = (0..n).map(|i| x[i] - probe.x0[i]).collect();
+        let dir: Vec<Vec3> = (0..n)
+            .map(|i| {
+                scene.directors[i] + Vec3::new(full[6 * i + 3], full[6 * i + 4], full[6 * i + 5])
+            })
+            .collect();
+        let (r, f) = probe.reactions(full, active);
+        write_vtu(
+            &d.join(file),
+            &x,
+            &scene.mesh.quads,
+            &[
+                PointData::Vector("displacement", disp),
+                PointData::Vector("director", dir),
+                PointData::Vector("contact_force", f),
+                PointData::Scalar("contact_reaction", r),
+            ],
+        )
+    };
+    let result = run(
+        &mut model,
+        vec![0.0; n_dof],
+        0.0,
+        &cfg,
+        |step: &PathStep, stats: &Stats| {
+            let full0 = probe.expand(&step.u[0]);
+            let active = search::active(
+                &probe.pairs,
+                &probe.positions(&full0),
+                &probe.obstacles,
+                probe.distance,
+            );
+            pull_bound =
+                pull_bound.max((probe.pairs.len() - active.len()) as f64 * scene.contact_eta);
+            if step.index == 0 {
+                history.push(probe.row(step.lambda[0], &full0, &active));
+                next_grid = 1;
+                write_shell("shell_0000.vtu", &full0, &active)?;
+                pvd.push((step.lambda[0], 0, "shell_0000.vtu".into()));
+            }
+            loop {
+                let g = next_grid as f64 * scene.lambda_step;
+                if g > step.lambda_end + 1e-12 || g > cfg.lambda_end + 1e-12 {
+                    break;
+                }
+                let u = if (g - step.lambda_end).abs() < 1e-12 {
+                    Some(step.u_end.clone())
+                } else {
+                    // The corrected end point stands for grid values within
+                    // 1e-8 of it: bisection on the series cannot find a root
+                    // that the correction moved past the series' own end.
+                    step.a_at_lambda(g).map(|a| step.eval(a).0).or_else(|| {
+                        ((g - step.lambda_end).abs() < 1e-8).then(|| step.u_end.clone())
+                    })
+                };
+                if let Some(u) = u {
+                    history.push(probe.row(g, &probe.expand(&u), &active));
+                }
+                next_grid += 1;
+            }
+            let full_end = probe.expand(&step.u_end);
+            if scene.vtk_every > 0 && (step.index + 1).is_multiple_of(scene.vtk_every) {
+                let name = format!("shell_{:04}.vtu", step.index + 1);
+                write_shell(&name, &full_end, &active)?;
+                pvd.push((step.lambda_end, 0, name));
+            }
+            last = Some((full_end, step.lambda_end, active));
+            if let Some(b) = &bar {
+                let frac = (step.lambda_end / cfg.lambda_end).clamp(0.0, 1.0);
+                b.set_position((frac * 1000.0) as u64);
+                b.set_message(format!(
+                    "lambda {:.4}  steps {}  factorizations {}",
+                    step.lambda_end, stats.steps, stats.factorizations
+                ));
+            }
+            Ok(())
+        },
+    );
+    if let Some(b) = &bar {
+        b.finish();
+    }
+    let (stop, uz_end) = {
+        let reason = result.stop.clone();
+        let message = result.error.as_ref().map(|e| e.to_string());
+        (
+            Stop {
+                reason,
+                t: None,
+                lambda: Some(result.lambda_end),
+                message,
+            },
+            if result.u_end.is_empty() {
+                0.0
+            } else {
+                probe.expand(&result.u_end)[6 * scene.probe + 2]
+            },
+        )
+    };
+    if let (Some(d), Some((full, lam, active))) = (out_dir, &last) {
+        let name = "shell_final.vtu".to_string();
+        write_shell(&name, full, active)?;
+        pvd.push((*lam, 0, name));
+        // Obstacles: one file each, shown at every time of the collection.
+        let size = scene.mesh.size();
+        let times: Vec<f64> = pvd.iter().map(|e| e.0).collect();
+        for (k, ob) in scene.obstacles.iter().enumerate() {
+            let (pts, quads) = match ob {
+                Obstacle::Cylinder {
+                    centre,
+                    axis,
+                    radius,
+                } => cylinder_surface(centre, axis, *radius, 1.5 * size.min(4.0 * radius), 96),
+                Obstacle::Plane { point, normal } => {
+                    let (p, q) = cylinder_surface(point, normal, 0.5 * size, 0.0, 4);
+                    (p, q)
+                }
+            };
+            let name = format!("obstacle_{k}.vtu");
+            write_vtu(&d.join(&name), &pts, &quads, &[])?;
+            for &t in &times {
+                pvd.push((t, k + 1, name.clone()));
+            }
+        }
+        write_pvd(&d.join("plate-cylinder.pvd"), &pvd)?;
+        write_csv(
+            &d.join("history.csv"),
+            &["lambda", "uz_A", "ux_A", "rn_B", "rn_C", "rn_D", "rn_total"],
+            &history.iter().map(|r| r.to_vec()).collect::<Vec<_>>(),
+        )?;
+        // Per-node contact forces at the last accepted point.
+        let x = probe.positions(full);
+        let mut rows = vec![];
+        for &ip in active {
+            let p = &probe.pairs[ip];
+            if let Some(g) = probe.obstacles[p.obstacle].gap(&x[p.node]) {
+                let r = p.law.force(g.h);
+                let x0 = probe.x0[p.node];
+                rows.push(vec![
+                    (p.node + 1) as f64,
+                    p.obstacle as f64,
+                    x0[0],
+                    x0[1],
+                    x0[2],
+                    g.h,
+                    r,
+                    r * g.n[0],
+                    r * g.n[1],
+                    r * g.n[2],
+                ]);
+            }
+        }
+        write_csv(
+            &d.join("contact_final.csv"),
+            &[
+                "node", "obstacle", "X", "Y", "Z", "gap", "rn", "fx", "fy", "fz",
+            ],
+            &rows,
+        )?;
+    }
+    let stats = result.stats.clone();
+    let report = RunReport {
+        scene: scene.file.display().to_string(),
+        mesh: scene.mesh.file.display().to_string(),
+        nodes: scene.mesh.nodes.len(),
+        elements: scene.mesh.quads.len(),
+        dofs: n_dof,
+        contact_candidates: probe.pairs.len(),
+        steps: stats.steps,
+        factorizations: stats.factorizations,
+        solves: stats.solves,
+        corrections: stats.corrections,
+        wall_s: start.elapsed().as_secs_f64(),
+        stats,
+        stop,
+        uz_a_end: uz_end,
+        skipped_pull_bound: pull_bound,
+        history,
+    };
+    if let Some(d) = out_dir {
+        write_json(&d.join("summary.json"), &report)?;
+        if scene.plot && report.history.len() > 1 {
+            let col = |k: usize| {
+                report
+                    .history
+                    .iter()
+                    .map(|r| (r[0], r[k]))
+                    .collect::<Vec<_>>()
+            };
+            draw(
+                &d.join("plot.svg"),
+                &[
+                    Panel {
+                        title: "plate-cylinder: deflection at A",
+                        x_label: "lambda",
+                        y_label: "uz_A (m)",
+                        curves: vec![Curve {
+                            label: "uz_A",
+                            points: col(1),
+                        }],
+                        log: (false, false),
+                    },
+                    Panel {
+                        title: "plate-cylinder: normal contact forces",
+                        x_label: "lambda",
+                        y_label: "R (N)",
+                        curves: vec![
+                            Curve {
+                                label: "rn_B (x = 1.0)",
+                                points: col(3),
+                            },
+                            Curve {
+                                label: "rn_C (x = 1.1)",
+                                points: col(4),
+                            },
+                            Curve {
+                                label: "rn_D (x = 1.2)",
+                                points: col(5),
+                            },
+                            Curve {
+                                label: "rn_total",
+                                points: col(6),
+                            },
+                        ],
+                        log: (false, false),
+                    },
+                ],
+            )?;
+        }
+    }
+    Ok(report)
+}

@@ -1,0 +1,295 @@
+//! Director-difference kinematics of the 3D shell (DESIGN §3; Büchter, Ramm,
+//! Roehl, IJNME 37 (1994) 2551–2568, eqs. 7–12).
+//!
+//! A material point is x = x̄(ξ, η) + θ3 a3(ξ, η), with the mid-surface
+//! position x̄ = X + v and the director a3 = A3 + w interpolated from the
+//! nodes (6 unknowns per node: v, w; no rotations). θ3 ∈ [-t/2, t/2] is the
+//! physical thickness coordinate and A3 the unit reference normal. The
+//! covariant base vectors are g_α = a_α + θ3 a3,α and g_3 = a3, and the
+//! Green–Lagrange strains E_ij = ½ (g_i·g_j − G_i·G_j), with the θ3² terms
+//! dropped, are E = E⁰ + θ3 E¹:
+//!
+//! ```text
+//! E⁰_αβ = ½ (a_α·a_β − A_α·A_β)          E¹_αβ = ½ (a_α·a3,β + a_β·a3,α − ref)
+//! E⁰_α3 = ½ (a_α·a3 − A_α·A3)            E¹_α3 = ½ (a3,α·a3 − A3,α·A3)
+//! E⁰_33 = ½ (a3·a3 − A3·A3)              E¹_33 = 0 (enhanced by EAS)
+//! ```
+//!
+//! Every component is a sum of terms c (x_k · x_l) of the five point vectors
+//! x = (a1, a2, a3, a3,1, a3,2), each linear in the element unknowns, so the
+//! strain is exactly quadratic in (v, w): its first derivative B is linear and
+//! its second derivative constant. This is what makes the ANM right-hand side
+//! a plain convolution (Zahrouni, Cochelin, Potier-Ferry, CMAME 175 (1999)).
+
+// Node/dof/component loops read better with explicit indices.
+#![allow(clippy::needless_range_loop)]
+
+use nalgebra::{SMatrix, Vector3};
+
+/// Number of strain components: (E⁰, E¹) × (11, 22, 12, 13, 23, 33), tensor
+/// (not engineering) components in the natural covariant basis.
+pub const NSTRAIN: usize = 12;
+/// Element unknowns: 4 nodes × (v, w).
+pub const NDOF_EL: usize = 24;
+
+pub type Vec3 = Vector3<f64>;
+/// The five point vectors a1, a2, a3, a3,1, a3,2.
+pub type PointVectors = [Vec3; 5];
+pub type Strain = [f64; NSTRAIN];
+pub type BMatrix = SMatrix<f64, NSTRAIN, NDOF_EL>;
+
+/// Which nodal field each point vector interpolates: 0 = mid-surface
+/// position (v slot), 1 = director (w slot).
+const SLOT: [usize; 5] = [0, 0, 1, 1, 1];
+
+/// Strain component c = sum over terms coef (x_k · x_l) − reference.
+const TERMS: [&[(usize, usize, f64)]; NSTRAIN] = [
+    &[(0, 0, 0.5)],
+    &[(1, 1, 0.5)],
+    &[(0, 1, 0.5)],
+    &[(0, 2, 0.5)],
+    &[(1, 2, 0.5)],
+    &[(2, 2, 0.5)],
+    &[(0, 3, 1.0)],
+    &[(1, 4, 1.0)],
+    &[(0, 4, 0.5), (1, 3, 0.5)],
+    &[(3, 2, 0.5)],
+    &[(4, 2, 0.5)],
+    &[],
+];
+
+/// Bilinear shape functions of the 4-node quadrilateral, nodes at
+/// (−1,−1), (1,−1), (1,1), (−1,1).
+pub fn shape(xi: f64, eta: f64) -> ([f64; 4], [f64; 4], [f64; 4]) {
+    const S: [(f64, f64); 4] = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)];
+    let mut n = [0.0; 4];
+    let mut nx = [0.0; 4];
+    let mut ny = [0.0; 4];
+    for (i, &(a, b)) in S.iter().enumerate() {
+        n[i] = 0.25 * (1.0 + a * xi) * (1.0 + b * eta);
+        nx[i] = 0.25 * a * (1.0 + b * eta);
+        ny[i] = 0.25 * b * (1.0 + a * xi);
+    }
+    (n, nx, ny)
+}
+
+/// Interpolation weights of the five point vectors at one point (ξ, η).
+#[derive(Clone, Debug)]
+pub struct Point {
+    /// phi[k][I]: weight of node I in vector k.
+    pub phi: [[f64; 4]; 5],
+}
+
+impl Point {
+    pub fn new(xi: f64, eta: f64) -> Self {
+        let (n, nx, ny) = shape(xi, eta);
+        Self {
+            phi: [nx, ny, n, nx, ny],
+        }
+    }
+
+    /// The point vectors from nodal positions `x` and directors `d` (full
+    /// values or series coefficients: the map is linear).
+    pub fn vectors(&self, x: &[Vec3; 4], d: &[Vec3; 4]) -> PointVectors {
+        let mut out = [Vec3::zeros(); 5];
+        for (k, o) in out.iter_mut().enumerate() {
+            let field = if SLOT[k] == 0 { x } else { d };
+            for i in 0..4 {
+                *o += self.phi[k][i] * field[i];
+            }
+        }
+        out
+    }
+
+    /// Point vectors from an element unknown vector (v, w per node).
+    pub fn vectors_of(&self, q: &[f64; NDOF_EL]) -> PointVectors {
+        let mut x = [Vec3::zeros(); 4];
+        let mut d = [Vec3::zeros(); 4];
+        for i in 0..4 {
+            x[i] = Vec3::new(q[6 * i], q[6 * i + 1], q[6 * i + 2]);
+            d[i] = Vec3::new(q[6 * i + 3], q[6 * i + 4], q[6 * i + 5]);
+        }
+        self.vectors(&x, &d)
+    }
+
+    /// B = dE/dq at the state with point vectors `x`.
+    pub fn bmatrix(&self, x: &PointVectors) -> BMatrix {
+        let mut b = BMatrix::zeros();
+        for (c, terms) in TERMS.iter().enumerate() {
+            for &(k, l, coef) in terms.iter() {
+                for i in 0..4 {
+                    for dim in 0..3 {
+                        b[(c, 6 * i + 3 * SLOT[k] + dim)] += coef * self.phi[k][i] * x[l][dim];
+                        b[(c, 6 * i + 3 * SLOT[l] + dim)] += coef * self.phi[l][i] * x[k][dim];
+                    }
+                }
+            }
+        }
+        b
+    }
+
+    /// B(x)^T sigma without forming B.
+    pub fn bt_sigma(&self, x: &PointVectors, sigma: &Strain, out: &mut [f64; NDOF_EL]) {
+        for (c, terms) in TERMS.iter().enumerate() {
+            let s = sigma[c];
+            if s == 0.0 {
+                continue;
+            }
+            for &(k, l, coef) in terms.iter() {
+                for i in 0..4 {
+                    let (fk, fl) = (coef * s * self.phi[k][i], coef * s * self.phi[l][i]);
+                    for dim in 0..3 {
+                        out[6 * i + 3 * SLOT[k] + dim] += fk * x[l][dim];
+                        out[6 * i + 3 * SLOT[l] + dim] += fl * x[k][dim];
+                    }
+                }
+            }
+        }
+    }
+
+    /// Σ_r B(x_r)ᵀ σ_r over a series of point vectors and stresses, by
+    /// first accumulating Σ_r σ_r[c] x_r (O(p) 3-vector work per strain
+    /// component) and scattering once: the convolution of an order-p
+    /// right-hand side.
+    pub fn bt_sigma_conv<'a>(
+        &self,
+        pairs: impl Iterator<Item = (&'a PointVectors, &'a Strain)>,
+        out: &mut [f64; NDOF_EL],
+    ) {
+        let mut acc = [[Vec3::zeros(); 5]; NSTRAIN];
+        let mut any = [false; NSTRAIN];
+        for (x, s) in pairs {
+            for (c, terms) in TERMS.iter().enumerate() {
+                let sc = s[c];
+                if sc == 0.0 || terms.is_empty() {
+                    continue;
+                }
+                any[c] = true;
+                for &(k, l, _) in terms.iter() {
+                    acc[c][l] += sc * x[l];
+                    if k != l {
+                        acc[c][k] += sc * x[k];
+                    }
+                }
+            }
+        }
+        for (c, terms) in TERMS.iter().enumerate() {
+            if !any[c] {
+                continue;
+            }
+            for &(k, l, coef) in terms.iter() {
+                for i in 0..4 {
+                    let (fk, fl) = (coef * self.phi[k][i], coef * self.phi[l][i]);
+                    for dim in 0..3 {
+                        out[6 * i + 3 * SLOT[k] + dim] += fk * acc[c][l][dim];
+                        out[6 * i + 3 * SLOT[l] + dim] += fl * acc[c][k][dim];
+                    }
+                }
+            }
+        }
+    }
+
+    /// Geometric stiffness sum_c sigma_c d²E_c/dq² as an 8×8 matrix over
+    /// (node, slot) pairs; the full 24×24 block is this ⊗ I3.
+    pub fn geometric(&self, sigma: &Strain, kg: &mut [[f64; 8]; 8]) {
+        for (c, terms) in TERMS.iter().enumerate() {
+            let s = sigma[c];
+            if s == 0.0 {
+                continue;
+            }
+            for &(k, l, coef) in terms.iter() {
+                for i in 0..4 {
+                    for j in 0..4 {
+                        let v = coef * s * self.phi[k][i] * self.phi[l][j];
+                        kg[2 * i + SLOT[k]][2 * j + SLOT[l]] += v;
+                        kg[2 * j + SLOT[l]][2 * i + SLOT[k]] += v;
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// Strain of the current point vectors `x` relative to the reference `x0`.
+pub fn strain(x: &PointVectors, x0: &PointVectors) -> Strain {
+    let mut e = [0.0; NSTRAIN];
+    for (c, terms) in TERMS.iter().enumerate() {
+        for &(k, l, coef) in terms.iter() {
+            e[c] += coef * (x[k].dot(&x[l]) - x0[k].dot(&x0[l]));
+        }
+    }
+    e
+}
+
+/// Coefficient of order p of the strain from the series of the point vectors
+/// `xs[r]`, r = 0..: sum over r from `lo` to p − lo of coef (x_k,r · x_l,p−r).
+/// With lo = 1 this is the order-p strain with the order-p unknowns set to
+/// zero (the quadratic convolution); with lo = 0 the complete coefficient.
+pub fn strain_coeff(xs: &[PointVectors], p: usize, lo: usize) -> Strain {
+    let mut e = [0.0; NSTRAIN];
+    for (c, terms) in TERMS.iter().enumerate() {
+        for &(k, l, coef) in terms.iter() {
+            let mut s = 0.0;
+            for r in lo..=(p - lo) {
+                s += xs[r][k].dot(&xs[p - r][l]);
+            }
+            e[c] += coef * s;
+        }
+    }
+    e
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn state(seed: f64) -> [f64; NDOF_EL] {
+        let mut q = [0.0; NDOF_EL];
+        for (i, v) in q.iter_mut().enumerate() {
+            *v = (seed * (i as f64 + 1.0) * 0.37).sin();
+        }
+        q
+    }
+
+    #[test]
+    fn bmatrix_and_geometric_stiffness_match_finite_differences() {
+        let pt = Point::new(0.3, -0.6);
+        let q0 = state(1.0);
+        let zero = pt.vectors_of(&[0.0; NDOF_EL]);
+        let b = pt.bmatrix(&pt.vectors_of(&q0));
+        let sigma: Strain = std::array::from_fn(|c| 0.1 * c as f64 - 0.4);
+        let mut kg = [[0.0; 8]; 8];
+        pt.geometric(&sigma, &mut kg);
+        let h = 1e-6;
+        for j in 0..NDOF_EL {
+            let mut qp = q0;
+            let mut qm = q0;
+            qp[j] += h;
+            qm[j] -= h;
+            let ep = strain(&pt.vectors_of(&qp), &zero);
+            let em = strain(&pt.vectors_of(&qm), &zero);
+            for c in 0..NSTRAIN {
+                let fd = (ep[c] - em[c]) / (2.0 * h);
+                assert!(
+                    (fd - b[(c, j)]).abs() < 1e-8,
+                    "B[{c},{j}]: {} vs {fd}",
+                    b[(c, j)]
+                );
+            }
+            // d(B^T sigma)/dq_j = Kg column j.
+            let mut fp = [0.0; NDOF_EL];
+            let mut fm = [0.0; NDOF_EL];
+            pt.bt_sigma(&pt.vectors_of(&qp), &sigma, &mut fp);
+            pt.bt_sigma(&pt.vectors_of(&qm), &sigma, &mut fm);
+            for i in 0..NDOF_EL {
+                let fd = (fp[i] - fm[i]) / (2.0 * h);
+                let an = if i % 3 == j % 3 {
+                    kg[2 * (i / 6) + (i % 6) / 3][2 * (j / 6) + (j % 6) / 3]
+                } else {
+                    0.0
+                };
+                assert!((fd - an).abs() < 1e-8, "Kg[{i},{j}]: {an} vs {fd}");
+            }
+        }
+    }
+}

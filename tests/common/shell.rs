@@ -1,0 +1,78 @@
+//! Helpers shared by the shell verification tests (included with
+//! `#[path = "common/shell.rs"] mod shell_common;`).
+#![allow(dead_code)]
+
+use anm::linalg::SparseLu;
+use anm::mesh::{Mesh, Vec3};
+use anm::series::ContinuationProblem;
+use anm::shell::kinematics::shape;
+use anm::shell::{Material, ShellModel};
+
+/// Builds the model of a mesh with its reference directors.
+pub fn model(mesh: &Mesh, thickness: f64, young: f64, poisson: f64) -> ShellModel {
+    let dirs = mesh.directors().expect("valid mesh");
+    ShellModel::new(
+        mesh.nodes.clone(),
+        dirs,
+        &mesh.quads,
+        thickness,
+        Material { young, poisson },
+    )
+    .expect("valid elements")
+}
+
+/// Consistent nodal forces of a uniform load per unit area `q` (2×2 Gauss on
+/// the bilinear reference geometry), added to the dead load pattern.
+pub fn add_area_load(m: &mut ShellModel, mesh: &Mesh, q: Vec3) {
+    let g = 1.0 / 3f64.sqrt();
+    for quad in &mesh.quads {
+        for (xi, eta) in [(-g, -g), (g, -g), (g, g), (-g, g)] {
+            let (n, nx, ny) = shape(xi, eta);
+            let mut a1 = Vec3::zeros();
+            let mut a2 = Vec3::zeros();
+            for i in 0..4 {
+                a1 += nx[i] * mesh.nodes[quad[i]];
+                a2 += ny[i] * mesh.nodes[quad[i]];
+            }
+            let da = a1.cross(&a2).norm();
+            for i in 0..4 {
+                for k in 0..3 {
+                    m.dead[6 * quad[i] + k] += n[i] * da * q[k];
+                }
+            }
+        }
+    }
+}
+
+/// Linear solution (one solve with the tangent at U = 0) for lambda = 1:
+/// K U = -dR/dlambda. Returns the full 6-per-node vector.
+pub fn linear(m: &mut ShellModel) -> Vec<f64> {
+    let u0 = vec![0.0; m.ndof()];
+    let (k, rl) = m.tangent(&u0, 0.0).expect("tangent");
+    let f = SparseLu::new().factorize(&k).expect("factorization");
+    let neg: Vec<f64> = rl.iter().map(|x| -x).collect();
+    let u = f.solve(&neg);
+    assert!(
+        u.iter().all(|x| x.is_finite()),
+        "non-finite linear solution"
+    );
+    m.expand(&u)
+}
+
+/// Fixes the given components (0..3 v, 3..6 w) at every node of `nodes`.
+pub fn fix(list: &mut Vec<(usize, usize)>, nodes: &[usize], comps: &[usize]) {
+    for &n in nodes {
+        for &c in comps {
+            list.push((n, c));
+        }
+    }
+}
+
+#[track_caller]
+pub fn assert_rel(got: f64, want: f64, tol: f64, what: &str) {
+    let err = (got - want).abs() / want.abs();
+    assert!(
+        got.is_finite() && err <= tol,
+        "{what}: got {got:.6e}, want {want:.6e}, relative error {err:.3e} > {tol:.1e}"
+    );
+}
