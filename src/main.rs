@@ -117,6 +117,10 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
     match cli.command {
         Command::Check { scene } => {
             let (kind, _) = load(&scene)?;
+            if kind == Kind::PlateCylinder {
+                let sc = anm::scene::shell::load(&scene)?;
+                anm::model::plate_cylinder::build_model(&sc)?;
+            }
             println!("{}: valid `{}` scene", scene.display(), kind.name());
             Ok(ExitCode::SUCCESS)
         }
@@ -316,10 +320,30 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
         Command::Run { scene, out, quiet } => {
             let (kind, friction) = load(&scene)?;
             match kind {
-                Kind::PlateCylinder => anyhow::bail!(
-                    "{}: plate-cylinder scenes are not wired into this build yet",
-                    scene.display()
-                ),
+                Kind::PlateCylinder => {
+                    let report = anm::model::plate_cylinder::run_scene(&scene, &out, !quiet)
+                        .with_context(|| format!("running {}", scene.display()))?;
+                    println!(
+                        "{}: stop = {} at lambda = {:.6}; {} dofs, {} steps, {} factorizations, {} solves, {:.3} s; uz_A = {:.6} m; outputs in {}",
+                        scene.display(),
+                        report.stop.reason,
+                        report.stop.lambda.unwrap_or(f64::NAN),
+                        report.dofs,
+                        report.steps,
+                        report.factorizations,
+                        report.solves,
+                        report.wall_s,
+                        report.uz_a_end,
+                        out.display()
+                    );
+                    if let Some(m) = &report.stop.message {
+                        println!("  {m}");
+                    }
+                    Ok(match report.stop.reason.as_str() {
+                        "end" => ExitCode::SUCCESS,
+                        _ => ExitCode::from(2),
+                    })
+                }
                 _ => {
                     let sc = friction.expect("friction kinds parse into a friction scene");
                     let run = anm::model::friction_run::run(&sc, Some(&out), !quiet)

@@ -57,6 +57,40 @@ pub struct RunReport {
     /// history.csv rows: lambda, uz_A, ux_A, rn_B, rn_C, rn_D, rn_total.
     #[serde(skip)]
     pub history: Vec<[f64; 7]>,
+    /// Full mid-surface fields at the scene's snapshot lambdas.
+    #[serde(skip)]
+    pub snapshots: Vec<Snapshot>,
+}
+
+/// The mid-surface at one lambda: per node, reference position, displacement,
+/// current director, normal reaction R and contact force R n.
+#[derive(Clone, Debug)]
+pub struct Snapshot {
+    pub lambda: f64,
+    pub x0: Vec<[f64; 3]>,
+    pub displacement: Vec<[f64; 3]>,
+    pub director: Vec<[f64; 3]>,
+    pub reaction: Vec<f64>,
+    pub force: Vec<[f64; 3]>,
+}
+
+impl Snapshot {
+    /// [x_lo, x_hi]: smallest and largest initial x of the nodes with R > threshold.
+    pub fn contact_zone(&self, threshold: f64) -> Option<(f64, f64)> {
+        let xs: Vec<f64> = self
+            .x0
+            .iter()
+            .zip(&self.reaction)
+            .filter(|(_, r)| **r > threshold)
+            .map(|(x, _)| x[0])
+            .collect();
+        (!xs.is_empty()).then(|| {
+            (
+                xs.iter().copied().fold(f64::INFINITY, f64::min),
+                xs.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+            )
+        })
+    }
 }
 
 impl RunReport {
@@ -207,6 +241,25 @@ pub fn run_loaded(scene: &ShellScene, out_dir: Option<&Path>, progress: bool) ->
     let mut pvd: Vec<(f64, usize, String)> = vec![];
     let mut pull_bound = 0.0f64;
     let mut last: Option<(Vec<f64>, f64, Vec<usize>)> = None;
+    let mut snapshots: Vec<Snapshot> = vec![];
+    let snapshot = |lambda: f64, full: &[f64], active: &[usize]| {
+        let x = probe.positions(full);
+        let (r, f) = probe.reactions(full, active);
+        let arr = |v: Vec3| [v[0], v[1], v[2]];
+        Snapshot {
+            lambda,
+            x0: probe.x0.iter().map(|v| arr(*v)).collect(),
+            displacement: (0..x.len()).map(|i| arr(x[i] - probe.x0[i])).collect(),
+            director: (0..x.len())
+                .map(|i| {
+                    arr(scene.directors[i]
+                        + Vec3::new(full[6 * i + 3], full[6 * i + 4], full[6 * i + 5]))
+                })
+                .collect(),
+            reaction: r,
+            force: f.into_iter().map(arr).collect(),
+        }
+    };
     let write_shell = |file: &str, full: &[f64], active: &[usize]| -> Result<()> {
         let Some(d) = out_dir else { return Ok(()) };
         let x = probe.positions(full);
@@ -267,7 +320,11 @@ pub fn run_loaded(scene: &ShellScene, out_dir: Option<&Path>, progress: bool) ->
                     })
                 };
                 if let Some(u) = u {
-                    history.push(probe.row(g, &probe.expand(&u), &active));
+                    let full = probe.expand(&u);
+                    history.push(probe.row(g, &full, &active));
+                    if scene.snapshots.iter().any(|s| (s - g).abs() < 1e-9) {
+                        snapshots.push(snapshot(g, &full, &active));
+                    }
                 }
                 next_grid += 1;
             }
@@ -388,9 +445,13 @@ pub fn run_loaded(scene: &ShellScene, out_dir: Option<&Path>, progress: bool) ->
         uz_a_end: uz_end,
         skipped_pull_bound: pull_bound,
         history,
+        snapshots,
     };
     if let Some(d) = out_dir {
         write_json(&d.join("summary.json"), &report)?;
+        if scene.hdf5 {
+            write_fields(&d.join("fields.h5"), scene, &report.snapshots)?;
+        }
         if scene.plot && report.history.len() > 1 {
             let col = |k: usize| {
                 report
@@ -441,4 +502,42 @@ pub fn run_loaded(scene: &ShellScene, out_dir: Option<&Path>, progress: bool) ->
         }
     }
     Ok(report)
+}
+
+/// fields.h5: one group per snapshot (feature `hdf5`).
+#[cfg(feature = "hdf5")]
+fn write_fields(path: &Path, scene: &ShellScene, snapshots: &[Snapshot]) -> Result<()> {
+    let mut w = crate::output::hdf5::FieldWriter::create(
+        path,
+        &[
+            ("scene", &scene.file.display().to_string()),
+            ("kind", "plate-cylinder"),
+            ("units", "m, N; director dimensionless"),
+        ],
+    )?;
+    let flat = |v: &[[f64; 3]]| v.iter().flatten().copied().collect::<Vec<f64>>();
+    for s in snapshots {
+        let coords: Vec<[f64; 3]> =
+            s.x0.iter()
+                .zip(&s.displacement)
+                .map(|(a, b)| [a[0] + b[0], a[1] + b[1], a[2] + b[2]])
+                .collect();
+        w.write_step(
+            &[("lambda", s.lambda)],
+            &[
+                ("reference_coordinates", 3, &flat(&s.x0)),
+                ("coordinates", 3, &flat(&coords)),
+                ("displacement", 3, &flat(&s.displacement)),
+                ("director", 3, &flat(&s.director)),
+                ("contact_force", 3, &flat(&s.force)),
+                ("contact_reaction", 1, &s.reaction),
+            ],
+        )?;
+    }
+    Ok(())
+}
+
+#[cfg(not(feature = "hdf5"))]
+fn write_fields(_path: &Path, _scene: &ShellScene, _snapshots: &[Snapshot]) -> Result<()> {
+    unreachable!("scene validation rejects output.hdf5 without the hdf5 feature")
 }

@@ -7,6 +7,7 @@
 //!     displacement (n, 3) m
 //!     director     (n, 3) current director a3 (dimensionless)
 //!     contact_force (n, 3) N
+//!     contact_reaction (n, 1) normal reaction R of eq. (3), N
 //! ```
 
 use crate::error::{Error, Result};
@@ -42,8 +43,13 @@ impl FieldWriter {
         })
     }
 
-    /// Writes a step: scalar attributes and (name, rows x 3) fields given row-major.
-    pub fn write_step(&mut self, scalars: &[(&str, f64)], fields: &[(&str, &[f64])]) -> Result<()> {
+    /// Writes a step: scalar attributes and (name, columns, values) fields,
+    /// row-major with `columns` values per node.
+    pub fn write_step(
+        &mut self,
+        scalars: &[(&str, f64)],
+        fields: &[(&str, usize, &[f64])],
+    ) -> Result<()> {
         let p = self.path.clone();
         let g = self
             .file
@@ -61,11 +67,14 @@ impl FieldWriter {
                 .and_then(|a| a.write_scalar(value))
                 .map_err(|e| err(&p, e))?;
         }
-        for (name, data) in fields {
-            if data.len() % 3 != 0 {
+        for (name, columns, data) in fields {
+            if *columns == 0 || data.len() % columns != 0 {
                 return Err(err(
                     &p,
-                    format!("field `{name}` has {} values, not rows of 3", data.len()),
+                    format!(
+                        "field `{name}` has {} values, not rows of {columns}",
+                        data.len()
+                    ),
                 ));
             }
             if let Some(bad) = data.iter().position(|x| !x.is_finite()) {
@@ -77,8 +86,9 @@ impl FieldWriter {
                     ),
                 ));
             }
-            let arr = ndarray::Array2::from_shape_vec((data.len() / 3, 3), data.to_vec())
-                .map_err(|e| err(&p, e))?;
+            let arr =
+                ndarray::Array2::from_shape_vec((data.len() / columns, *columns), data.to_vec())
+                    .map_err(|e| err(&p, e))?;
             g.new_dataset_builder()
                 .with_data(&arr)
                 .create(*name)

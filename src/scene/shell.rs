@@ -171,6 +171,17 @@ struct RawOutput {
     vtk_every: usize,
     #[serde(default = "default_true")]
     plot: bool,
+    /// Lambda values (on the grid) where the full mid-surface fields are
+    /// kept: HDF5 output and the comparison with the dolfinx reference.
+    #[serde(default = "default_snapshots")]
+    snapshots: Vec<f64>,
+    /// Write fields.h5 (needs a build with the `hdf5` feature).
+    #[serde(default)]
+    hdf5: bool,
+}
+
+fn default_snapshots() -> Vec<f64> {
+    vec![0.05, 0.1, 0.2, 0.5, 1.0]
 }
 
 fn default_vtk_every() -> usize {
@@ -207,6 +218,8 @@ pub struct ShellScene {
     pub row_x: [f64; 3],
     pub vtk_every: usize,
     pub plot: bool,
+    pub snapshots: Vec<f64>,
+    pub hdf5: bool,
 }
 
 fn v3(a: [f64; 3]) -> Vec3 {
@@ -376,6 +389,18 @@ pub fn load(path: &Path) -> Result<ShellScene> {
             format!("({:?}) is not a node of {}", o.probe, mesh.file.display()),
         )
     })?;
+    for (k, &l) in o.snapshots.iter().enumerate() {
+        let on_grid = (l / lambda_step - (l / lambda_step).round()).abs() < 1e-9;
+        if !(l >= 0.0 && l.is_finite() && on_grid) {
+            return Err(c.fail(&format!("output.snapshots[{k}]"), format!("{l} is not a value of the lambda grid (multiples of output.lambda_step = {lambda_step})")));
+        }
+    }
+    if o.hdf5 && !cfg!(feature = "hdf5") {
+        return Err(c.fail(
+            "output.hdf5",
+            "this build has no HDF5 support: rebuild with `--features hdf5`",
+        ));
+    }
     let mut rows: [Vec<usize>; 3] = Default::default();
     for (k, &x) in o.contact_rows.iter().enumerate() {
         rows[k] = (0..mesh.nodes.len())
@@ -408,6 +433,8 @@ pub fn load(path: &Path) -> Result<ShellScene> {
         row_x: o.contact_rows,
         vtk_every: o.vtk_every,
         plot: o.plot,
+        snapshots: o.snapshots.clone(),
+        hdf5: o.hdf5,
         mesh,
     })
 }
