@@ -19,7 +19,7 @@
 #![cfg(feature = "reference")]
 
 mod common;
-use anm::model::plate_cylinder::{run_loaded, RunReport, Snapshot};
+use anm::model::plate_cylinder::{RunReport, Snapshot, run_loaded};
 use std::path::Path;
 use std::sync::OnceLock;
 
@@ -29,11 +29,14 @@ fn root() -> &'static Path {
     Path::new(env!("CARGO_MANIFEST_DIR"))
 }
 
-/// The ANM run of the canonical scene (0.05 m elements), shared by the tests.
+/// The ANM run of the canonical scene on the 0.025 m mesh, shared by the
+/// tests (the 0.05 m mesh resolves the contact-zone ends only to its node
+/// spacing, and deviates by up to 1.4% in uz_A during the sliding-line phase).
 fn anm() -> &'static RunReport {
     static RUN: OnceLock<RunReport> = OnceLock::new();
     RUN.get_or_init(|| {
-        let scene = anm::scene::shell::load(&root().join("scenes/plate-cylinder.toml")).expect("scene");
+        let scene = anm::scene::shell::load(&root().join("scenes/plate-cylinder-fine.toml"))
+            .expect("scene");
         let r = run_loaded(&scene, None, false).expect("ANM run");
         assert_eq!(r.stop.reason, "end", "{:?}", r.stop);
         r
@@ -44,12 +47,22 @@ fn anm() -> &'static RunReport {
 fn reference() -> Vec<Vec<f64>> {
     let path = root().join(format!("reference/data/plate-cylinder/curves_{MESH}.csv"));
     let mut r = csv::Reader::from_path(&path).expect("reference curves");
-    r.records().map(|rec| rec.unwrap().iter().map(|x| x.parse::<f64>().unwrap_or(f64::NAN)).collect()).collect()
+    r.records()
+        .map(|rec| {
+            rec.unwrap()
+                .iter()
+                .map(|x| x.parse::<f64>().unwrap_or(f64::NAN))
+                .collect()
+        })
+        .collect()
 }
 
 /// Linear interpolation of column j of the reference at lambda.
 fn interp(rows: &[Vec<f64>], j: usize, lambda: f64) -> f64 {
-    let k = rows.iter().position(|r| r[0] >= lambda - 1e-12).expect("lambda within the reference");
+    let k = rows
+        .iter()
+        .position(|r| r[0] >= lambda - 1e-12)
+        .expect("lambda within the reference");
     if k == 0 || (rows[k][0] - lambda).abs() < 1e-12 {
         return rows[k][j];
     }
@@ -70,12 +83,30 @@ fn tip_displacements_within_one_percent_of_their_max() {
                 worst = (d, row[0]);
             }
         }
-        println!("{name}: max |ANM - dolfinx| / max|dolfinx| = {:.3e} at lambda = {:.2}", worst.0, worst.1);
-        assert!(worst.0 <= 0.01, "{name}: {:.3e} at lambda = {}", worst.0, worst.1);
+        println!(
+            "{name}: max |ANM - dolfinx| / max|dolfinx| = {:.3e} at lambda = {:.2}",
+            worst.0, worst.1
+        );
+        assert!(
+            worst.0 <= 0.01,
+            "{name}: {:.3e} at lambda = {}",
+            worst.0,
+            worst.1
+        );
     }
     for l in [0.05, 0.1, 0.2, 0.5, 1.0] {
-        let a = anm.history.iter().find(|r| (r[0] - l).abs() < 1e-9).unwrap();
-        println!("{l:<8} {:<10.5} {:<14.5} {:<10.5} {:.5}", a[1], interp(&refr, 1, l), a[2], interp(&refr, 2, l));
+        let a = anm
+            .history
+            .iter()
+            .find(|r| (r[0] - l).abs() < 1e-9)
+            .unwrap();
+        println!(
+            "{l:<8} {:<10.5} {:<14.5} {:<10.5} {:.5}",
+            a[1],
+            interp(&refr, 1, l),
+            a[2],
+            interp(&refr, 2, l)
+        );
     }
 }
 
@@ -85,7 +116,11 @@ fn total_contact_force_within_three_percent_and_row_forces_side_by_side() {
     println!("lambda   rn_total ANM  dolfinx   | rn_B ANM / dolfinx | rn_C | rn_D");
     let mut worst: f64 = 0.0;
     for l in [0.05, 0.1, 0.2, 0.5, 1.0] {
-        let a = anm.history.iter().find(|r| (r[0] - l).abs() < 1e-9).unwrap();
+        let a = anm
+            .history
+            .iter()
+            .find(|r| (r[0] - l).abs() < 1e-9)
+            .unwrap();
         let want = interp(&refr, 6, l);
         let d = (a[6] - want).abs() / want.abs();
         worst = worst.max(d);
@@ -100,13 +135,21 @@ fn total_contact_force_within_three_percent_and_row_forces_side_by_side() {
             a[5],
             interp(&refr, 5, l)
         );
-        assert!(d <= 0.03, "rn_total at lambda = {l}: ANM {} vs dolfinx {want} ({d:.3e})", a[6]);
+        assert!(
+            d <= 0.03,
+            "rn_total at lambda = {l}: ANM {} vs dolfinx {want} ({d:.3e})",
+            a[6]
+        );
     }
     println!("max relative deviation of rn_total: {worst:.3e}");
 }
 
 fn snapshot(l: f64) -> &'static Snapshot {
-    anm().snapshots.iter().find(|s| (s.lambda - l).abs() < 1e-9).expect("snapshot")
+    anm()
+        .snapshots
+        .iter()
+        .find(|s| (s.lambda - l).abs() < 1e-9)
+        .expect("snapshot")
 }
 
 #[test]
@@ -115,32 +158,48 @@ fn contact_zone_ends_within_two_centimetres() {
     println!("lambda   ANM zone            dolfinx zone   (nodes with R > 1e-3 N)");
     let mut failures = vec![];
     for l in [0.1, 0.2, 0.5, 1.0] {
-        let (lo, hi) = snapshot(l).contact_zone(1e-3).expect("contact at this load");
+        let (lo, hi) = snapshot(l)
+            .contact_zone(1e-3)
+            .expect("contact at this load");
         let (rlo, rhi) = (interp(&refr, 7, l), interp(&refr, 8, l));
         println!("{l:<8} [{lo:.4}, {hi:.4}]    [{rlo:.4}, {rhi:.4}]");
         if (lo - rlo).abs() > 0.02 || (hi - rhi).abs() > 0.02 {
             failures.push((l, lo, hi, rlo, rhi));
         }
     }
-    assert!(failures.is_empty(), "zone ends off by more than 0.02 m: {failures:?}");
+    assert!(
+        failures.is_empty(),
+        "zone ends off by more than 0.02 m: {failures:?}"
+    );
 }
 
 #[test]
 fn deformed_mid_surface_within_one_percent_of_max_displacement() {
-    let file = hdf5::File::open(root().join(format!("reference/data/plate-cylinder/midsurface_{MESH}.h5"))).expect("reference HDF5");
+    let file = hdf5::File::open(root().join(format!(
+        "reference/data/plate-cylinder/midsurface_{MESH}.h5"
+    )))
+    .expect("reference HDF5");
     for l in [0.1, 0.5, 1.0] {
         let g = file.group(&format!("lambda_{l}")).expect("group");
         let x: ndarray::Array2<f64> = g.dataset("X").unwrap().read_2d().unwrap();
         let u: ndarray::Array2<f64> = g.dataset("u").unwrap().read_2d().unwrap();
         let s = snapshot(l);
-        let umax = u.rows().into_iter().map(|r| r.dot(&r).sqrt()).fold(0.0, f64::max);
+        let umax = u
+            .rows()
+            .into_iter()
+            .map(|r| r.dot(&r).sqrt())
+            .fold(0.0, f64::max);
         let mut worst: f64 = 0.0;
         for (xr, ur) in x.rows().into_iter().zip(u.rows()) {
             let ua = interpolate_on_strip(s, [xr[0], xr[1]]);
-            let d = ((ua[0] - ur[0]).powi(2) + (ua[1] - ur[1]).powi(2) + (ua[2] - ur[2]).powi(2)).sqrt();
+            let d = ((ua[0] - ur[0]).powi(2) + (ua[1] - ur[1]).powi(2) + (ua[2] - ur[2]).powi(2))
+                .sqrt();
             worst = worst.max(d / umax);
         }
-        println!("lambda = {l}: max |u_ANM - u_dolfinx| / max|u| = {worst:.3e} over {} reference nodes (max |u| = {umax:.4} m)", x.nrows());
+        println!(
+            "lambda = {l}: max |u_ANM - u_dolfinx| / max|u| = {worst:.3e} over {} reference nodes (max |u| = {umax:.4} m)",
+            x.nrows()
+        );
         assert!(worst <= 0.01, "lambda = {l}: {worst:e}");
     }
 }
@@ -156,13 +215,26 @@ fn interpolate_on_strip(s: &Snapshot, p: [f64; 2]) -> [f64; 3] {
         v.dedup_by(|a, b| (*a - *b).abs() < 1e-9);
     }
     let cell = |v: &[f64], t: f64| {
-        let i = v.iter().position(|&a| a > t + 1e-12).unwrap_or(v.len() - 1).clamp(1, v.len() - 1);
+        let i = v
+            .iter()
+            .position(|&a| a > t + 1e-12)
+            .unwrap_or(v.len() - 1)
+            .clamp(1, v.len() - 1);
         (i - 1, (t - v[i - 1]) / (v[i] - v[i - 1]))
     };
     let (i, sx) = cell(&xs, p[0]);
     let (j, sy) = cell(&ys, p[1]);
-    let node = |x: f64, y: f64| s.x0.iter().position(|q| (q[0] - x).abs() < 1e-9 && (q[1] - y).abs() < 1e-9).expect("structured grid node");
-    let corners = [(i, j, (1.0 - sx) * (1.0 - sy)), (i + 1, j, sx * (1.0 - sy)), (i, j + 1, (1.0 - sx) * sy), (i + 1, j + 1, sx * sy)];
+    let node = |x: f64, y: f64| {
+        s.x0.iter()
+            .position(|q| (q[0] - x).abs() < 1e-9 && (q[1] - y).abs() < 1e-9)
+            .expect("structured grid node")
+    };
+    let corners = [
+        (i, j, (1.0 - sx) * (1.0 - sy)),
+        (i + 1, j, sx * (1.0 - sy)),
+        (i, j + 1, (1.0 - sx) * sy),
+        (i + 1, j + 1, sx * sy),
+    ];
     let mut u = [0.0; 3];
     for (a, b, w) in corners {
         let n = node(xs[a], ys[b]);

@@ -26,7 +26,7 @@ use crate::output::plot::{Curve, Panel, draw};
 use crate::output::vtk::{PointData, cylinder_surface, write_pvd, write_vtu};
 use crate::output::{Stop, create_dir, write_csv, write_json};
 use crate::scene::shell::{ShellScene, load};
-use crate::series::continuation::{PathStep, run};
+use crate::series::continuation::{PathResult, PathStep, run};
 use crate::series::{ContinuationProblem, Stats};
 use crate::shell::ShellModel;
 use serde::Serialize;
@@ -283,69 +283,84 @@ pub fn run_loaded(scene: &ShellScene, out_dir: Option<&Path>, progress: bool) ->
             ],
         )
     };
-    let result = run(
-        &mut model,
-        vec![0.0; n_dof],
-        0.0,
-        &cfg,
-        |step: &PathStep, stats: &Stats| {
-            let full0 = probe.expand(&step.u[0]);
-            let active = search::active(
-                &probe.pairs,
-                &probe.positions(&full0),
-                &probe.obstacles,
-                probe.distance,
-            );
-            pull_bound =
-                pull_bound.max((probe.pairs.len() - active.len()) as f64 * scene.contact_eta);
-            if step.index == 0 {
-                history.push(probe.row(step.lambda[0], &full0, &active));
-                next_grid = 1;
-                write_shell("shell_0000.vtu", &full0, &active)?;
-                pvd.push((step.lambda[0], 0, "shell_0000.vtu".into()));
-            }
-            loop {
-                let g = next_grid as f64 * scene.lambda_step;
-                if g > step.lambda_end + 1e-12 || g > cfg.lambda_end + 1e-12 {
-                    break;
+    let result = if let Some(ncfg) = &scene.newton {
+        run_newton(
+            &mut model,
+            &probe,
+            scene,
+            ncfg,
+            n_dof,
+            &mut history,
+            &mut snapshots,
+            &mut last,
+            &bar,
+            &snapshot,
+        )
+    } else {
+        run(
+            &mut model,
+            vec![0.0; n_dof],
+            0.0,
+            &cfg,
+            |step: &PathStep, stats: &Stats| {
+                let full0 = probe.expand(&step.u[0]);
+                let active = search::active(
+                    &probe.pairs,
+                    &probe.positions(&full0),
+                    &probe.obstacles,
+                    probe.distance,
+                );
+                pull_bound =
+                    pull_bound.max((probe.pairs.len() - active.len()) as f64 * scene.contact_eta);
+                if step.index == 0 {
+                    history.push(probe.row(step.lambda[0], &full0, &active));
+                    next_grid = 1;
+                    write_shell("shell_0000.vtu", &full0, &active)?;
+                    pvd.push((step.lambda[0], 0, "shell_0000.vtu".into()));
                 }
-                let u = if (g - step.lambda_end).abs() < 1e-12 {
-                    Some(step.u_end.clone())
-                } else {
-                    // The corrected end point stands for grid values within
-                    // 1e-8 of it: bisection on the series cannot find a root
-                    // that the correction moved past the series' own end.
-                    step.a_at_lambda(g).map(|a| step.eval(a).0).or_else(|| {
-                        ((g - step.lambda_end).abs() < 1e-8).then(|| step.u_end.clone())
-                    })
-                };
-                if let Some(u) = u {
-                    let full = probe.expand(&u);
-                    history.push(probe.row(g, &full, &active));
-                    if scene.snapshots.iter().any(|s| (s - g).abs() < 1e-9) {
-                        snapshots.push(snapshot(g, &full, &active));
+                loop {
+                    let g = next_grid as f64 * scene.lambda_step;
+                    if g > step.lambda_end + 1e-12 || g > cfg.lambda_end + 1e-12 {
+                        break;
                     }
+                    let u = if (g - step.lambda_end).abs() < 1e-12 {
+                        Some(step.u_end.clone())
+                    } else {
+                        // The corrected end point stands for grid values within
+                        // 1e-8 of it: bisection on the series cannot find a root
+                        // that the correction moved past the series' own end.
+                        step.a_at_lambda(g).map(|a| step.eval(a).0).or_else(|| {
+                            ((g - step.lambda_end).abs() < 1e-8).then(|| step.u_end.clone())
+                        })
+                    };
+                    if let Some(u) = u {
+                        let full = probe.expand(&u);
+                        history.push(probe.row(g, &full, &active));
+                        if scene.snapshots.iter().any(|s| (s - g).abs() < 1e-9) {
+                            snapshots.push(snapshot(g, &full, &active));
+                        }
+                    }
+                    next_grid += 1;
                 }
-                next_grid += 1;
-            }
-            let full_end = probe.expand(&step.u_end);
-            if scene.vtk_every > 0 && (step.index + 1).is_multiple_of(scene.vtk_every) {
-                let name = format!("shell_{:04}.vtu", step.index + 1);
-                write_shell(&name, &full_end, &active)?;
-                pvd.push((step.lambda_end, 0, name));
-            }
-            last = Some((full_end, step.lambda_end, active));
-            if let Some(b) = &bar {
-                let frac = (step.lambda_end / cfg.lambda_end).clamp(0.0, 1.0);
-                b.set_position((frac * 1000.0) as u64);
-                b.set_message(format!(
-                    "lambda {:.4}  steps {}  factorizations {}",
-                    step.lambda_end, stats.steps, stats.factorizations
-                ));
-            }
-            Ok(())
-        },
-    );
+                let full_end = probe.expand(&step.u_end);
+                if scene.vtk_every > 0 && (step.index + 1).is_multiple_of(scene.vtk_every) {
+                    let name = format!("shell_{:04}.vtu", step.index + 1);
+                    write_shell(&name, &full_end, &active)?;
+                    pvd.push((step.lambda_end, 0, name));
+                }
+                last = Some((full_end, step.lambda_end, active));
+                if let Some(b) = &bar {
+                    let frac = (step.lambda_end / cfg.lambda_end).clamp(0.0, 1.0);
+                    b.set_position((frac * 1000.0) as u64);
+                    b.set_message(format!(
+                        "lambda {:.4}  steps {}  factorizations {}",
+                        step.lambda_end, stats.steps, stats.factorizations
+                    ));
+                }
+                Ok(())
+            },
+        )
+    };
     if let Some(b) = &bar {
         b.finish();
     }
@@ -540,4 +555,65 @@ fn write_fields(path: &Path, scene: &ShellScene, snapshots: &[Snapshot]) -> Resu
 #[cfg(not(feature = "hdf5"))]
 fn write_fields(_path: &Path, _scene: &ShellScene, _snapshots: &[Snapshot]) -> Result<()> {
     unreachable!("scene validation rejects output.hdf5 without the hdf5 feature")
+}
+
+/// The Newton-Raphson baseline on the same model (`solver.method = "newton"`):
+/// it lands exactly on every lambda of the output grid, where history rows and
+/// snapshots are taken.
+#[allow(clippy::too_many_arguments)]
+fn run_newton(
+    model: &mut ShellModel,
+    probe: &Probe,
+    scene: &ShellScene,
+    cfg: &crate::series::newton::NewtonConfig,
+    n_dof: usize,
+    history: &mut Vec<[f64; 7]>,
+    snapshots: &mut Vec<Snapshot>,
+    last: &mut Option<(Vec<f64>, f64, Vec<usize>)>,
+    bar: &Option<indicatif::ProgressBar>,
+    snapshot: &dyn Fn(f64, &[f64], &[usize]) -> Snapshot,
+) -> PathResult {
+    let n_grid = (cfg.lambda_end / scene.lambda_step).round() as usize;
+    let grid: Vec<f64> = (1..=n_grid).map(|i| i as f64 * scene.lambda_step).collect();
+    let full0 = vec![0.0; probe.x0.len() * 6];
+    history.push(probe.row(0.0, &full0, &[]));
+    let r = crate::series::newton::run(
+        model,
+        vec![0.0; n_dof],
+        0.0,
+        cfg,
+        &grid,
+        |u, lambda, stats| {
+            let full = probe.expand(u);
+            let active = search::active(
+                &probe.pairs,
+                &probe.positions(&full),
+                &probe.obstacles,
+                probe.distance,
+            );
+            if grid.iter().any(|g| (g - lambda).abs() < 1e-12) {
+                let g = (lambda / scene.lambda_step).round() * scene.lambda_step;
+                history.push(probe.row(g, &full, &active));
+                if scene.snapshots.iter().any(|s| (s - g).abs() < 1e-9) {
+                    snapshots.push(snapshot(g, &full, &active));
+                }
+            }
+            *last = Some((full, lambda, active));
+            if let Some(b) = bar {
+                b.set_position(((lambda / cfg.lambda_end).clamp(0.0, 1.0) * 1000.0) as u64);
+                b.set_message(format!(
+                    "Newton: lambda {lambda:.4}  steps {}  factorizations {}",
+                    stats.steps, stats.factorizations
+                ));
+            }
+            Ok(())
+        },
+    );
+    PathResult {
+        stats: r.stats,
+        stop: r.stop,
+        error: r.error,
+        u_end: r.u_end,
+        lambda_end: r.lambda_end,
+    }
 }

@@ -142,6 +142,16 @@ struct RawSolver {
     correct: bool,
     #[serde(default = "default_max_corr")]
     max_corrections: usize,
+    /// "anm" (default) or "newton" (the Newton-Raphson baseline).
+    method: Option<String>,
+    /// Newton: "arclength" (default) or "load" control.
+    newton_control: Option<String>,
+    /// Newton: first increment (of the arclength, or of lambda).
+    newton_step: Option<f64>,
+    /// Newton: largest increment.
+    newton_max_step: Option<f64>,
+    /// Newton: convergence tolerance on |R| / |R_lambda|.
+    newton_tol: Option<f64>,
 }
 
 fn default_max_steps() -> usize {
@@ -218,6 +228,8 @@ pub struct ShellScene {
     pub row_x: [f64; 3],
     pub vtk_every: usize,
     pub plot: bool,
+    /// The Newton-Raphson baseline instead of the ANM (`solver.method = "newton"`).
+    pub newton: Option<crate::series::newton::NewtonConfig>,
     pub snapshots: Vec<f64>,
     pub hdf5: bool,
 }
@@ -381,6 +393,38 @@ pub fn load(path: &Path) -> Result<ShellScene> {
         max_corrections: s.max_corrections,
         ..Default::default()
     };
+    let newton = match s.method.as_deref() {
+        None | Some("anm") => None,
+        Some("newton") => {
+            use crate::series::newton::{Control, NewtonConfig};
+            let control = match s.newton_control.as_deref() {
+                None | Some("arclength") => Control::Arclength,
+                Some("load") => Control::Load,
+                Some(other) => {
+                    return Err(c.fail(
+                        "solver.newton_control",
+                        format!("expected \"arclength\" or \"load\", got \"{other}\""),
+                    ));
+                }
+            };
+            let initial_step = c.positive("solver.newton_step", s.newton_step.unwrap_or(0.01))?;
+            Some(NewtonConfig {
+                control,
+                initial_step,
+                max_step: c.positive("solver.newton_max_step", s.newton_max_step.unwrap_or(0.1))?,
+                tol: c.positive("solver.newton_tol", s.newton_tol.unwrap_or(s.residual_tol))?,
+                lambda_end: solver.lambda_end,
+                max_steps: s.max_steps,
+                ..Default::default()
+            })
+        }
+        Some(other) => {
+            return Err(c.fail(
+                "solver.method",
+                format!("expected \"anm\" or \"newton\", got \"{other}\""),
+            ));
+        }
+    };
     let o = &raw.output;
     let lambda_step = c.positive("output.lambda_step", o.lambda_step)?;
     let probe = mesh.node_at(&v3(o.probe), tol).ok_or_else(|| {
@@ -433,6 +477,7 @@ pub fn load(path: &Path) -> Result<ShellScene> {
         row_x: o.contact_rows,
         vtk_every: o.vtk_every,
         plot: o.plot,
+        newton,
         snapshots: o.snapshots.clone(),
         hdf5: o.hdf5,
         mesh,

@@ -161,10 +161,26 @@ pub fn run<P: ContinuationProblem>(
             problem, &up, lp, control, &du, dl, cfg, &mut lu, &mut stats, index,
         ) {
             Ok((un, ln, iterations)) => {
-                stats.steps += 1;
                 let inc: Vec<f64> = un.iter().zip(&u).map(|(a, b)| a - b).collect();
                 let dln = ln - lambda;
                 let len = (dot(&inc, &inc) + dln * dln).sqrt();
+                // A corrector that converged onto the path behind us (the
+                // increment turns back on the previous direction) has lost
+                // the path: retry with half the increment.
+                if len > 0.0 && dot(&inc, &du) + dln * dl < 0.0 && control == Control::Arclength {
+                    step *= 0.5;
+                    if step < cfg.min_step {
+                        let collapse = Error::StepCollapse {
+                            step: index,
+                            param: "lambda",
+                            at: lambda,
+                            length: step,
+                        };
+                        return done(stats, "", Some(collapse), u, lambda);
+                    }
+                    continue;
+                }
+                stats.steps += 1;
                 if len > 0.0 {
                     dir = Some((inc.iter().map(|x| x / len).collect(), dln / len));
                 }
@@ -183,7 +199,8 @@ pub fn run<P: ContinuationProblem>(
             Err(
                 e @ (Error::NoConvergence { .. }
                 | Error::SingularMatrix { .. }
-                | Error::NonFinite { .. }),
+                | Error::NonFinite { .. }
+                | Error::ContactMissed { .. }),
             ) => {
                 step *= 0.5;
                 if step < cfg.min_step {
@@ -250,12 +267,14 @@ fn correct<P: ContinuationProblem>(
     let mut u = up.to_vec();
     let mut l = lp;
     for it in 0..=cfg.max_iterations {
+        // Tangent first: a problem may refresh state there (e.g. the active
+        // contact set at the current iterate) that its residual relies on.
+        let t = Instant::now();
+        let (k, rl) = problem.tangent(&u, l)?;
+        charge(&mut stats.assembly_s, t);
         let t = Instant::now();
         let r = problem.residual(&u, l)?;
         stats.residual_evaluations += 1;
-        charge(&mut stats.assembly_s, t);
-        let t = Instant::now();
-        let (k, rl) = problem.tangent(&u, l)?;
         charge(&mut stats.assembly_s, t);
         let res = norm(&r) / norm(&rl).max(f64::MIN_POSITIVE);
         if !res.is_finite() {
