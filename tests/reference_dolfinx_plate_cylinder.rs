@@ -238,8 +238,8 @@ fn interpolate_on_strip(s: &Snapshot, p: [f64; 2]) -> [f64; 3] {
     let mut u = [0.0; 3];
     for (a, b, w) in corners {
         let n = node(xs[a], ys[b]);
-        for k in 0..3 {
-            u[k] += w * s.displacement[n][k];
+        for (uk, dk) in u.iter_mut().zip(s.displacement[n]) {
+            *uk += w * dk;
         }
     }
     u

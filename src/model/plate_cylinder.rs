@@ -557,6 +557,9 @@ fn write_fields(_path: &Path, _scene: &ShellScene, _snapshots: &[Snapshot]) -> R
     unreachable!("scene validation rejects output.hdf5 without the hdf5 feature")
 }
 
+/// Takes a snapshot of the mid-surface at (lambda, full state, active pairs).
+type SnapshotFn<'a> = dyn Fn(f64, &[f64], &[usize]) -> Snapshot + 'a;
+
 /// The Newton-Raphson baseline on the same model (`solver.method = "newton"`):
 /// it lands exactly on every lambda of the output grid, where history rows and
 /// snapshots are taken.
@@ -571,13 +574,13 @@ fn run_newton(
     snapshots: &mut Vec<Snapshot>,
     last: &mut Option<(Vec<f64>, f64, Vec<usize>)>,
     bar: &Option<indicatif::ProgressBar>,
-    snapshot: &dyn Fn(f64, &[f64], &[usize]) -> Snapshot,
+    snapshot: &SnapshotFn,
 ) -> PathResult {
     let n_grid = (cfg.lambda_end / scene.lambda_step).round() as usize;
     let grid: Vec<f64> = (1..=n_grid).map(|i| i as f64 * scene.lambda_step).collect();
     let full0 = vec![0.0; probe.x0.len() * 6];
     history.push(probe.row(0.0, &full0, &[]));
-    let r = crate::series::newton::run(
+    crate::series::newton::run(
         model,
         vec![0.0; n_dof],
         0.0,
@@ -608,12 +611,5 @@ fn run_newton(
             }
             Ok(())
         },
-    );
-    PathResult {
-        stats: r.stats,
-        stop: r.stop,
-        error: r.error,
-        u_end: r.u_end,
-        lambda_end: r.lambda_end,
-    }
+    )
 }

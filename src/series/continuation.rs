@@ -206,6 +206,27 @@ pub fn run<P: ContinuationProblem>(
     finish(stats, "max_steps", None, u, lambda)
 }
 
+/// Factorizes a tangent, counting and timing it; a failure becomes a
+/// singular-matrix error at (step, lambda).
+pub(crate) fn factorize(
+    lu: &mut SparseLu,
+    k: &SparseMatrix,
+    stats: &mut Stats,
+    step: usize,
+    lambda: f64,
+) -> Result<Factorization> {
+    let t = Instant::now();
+    let f = lu.factorize(k).map_err(|detail| Error::SingularMatrix {
+        step,
+        param: "lambda",
+        at: lambda,
+        detail,
+    })?;
+    stats.factorizations += 1;
+    charge(&mut stats.factorization_s, t);
+    Ok(f)
+}
+
 #[allow(clippy::too_many_arguments)]
 fn series_step<P: ContinuationProblem>(
     problem: &mut P,
@@ -222,15 +243,7 @@ fn series_step<P: ContinuationProblem>(
     let t = Instant::now();
     let (kt, r_lambda) = problem.tangent(u0, lambda0)?;
     charge(&mut stats.assembly_s, t);
-    let t = Instant::now();
-    let fact = lu.factorize(&kt).map_err(|detail| Error::SingularMatrix {
-        step: index,
-        param: "lambda",
-        at: lambda0,
-        detail,
-    })?;
-    stats.factorizations += 1;
-    charge(&mut stats.factorization_s, t);
+    let fact = factorize(lu, &kt, stats, index, lambda0)?;
     let solve = |b: &[f64], stats: &mut Stats, what: &str| -> Result<Vec<f64>> {
         let t = Instant::now();
         let neg: Vec<f64> = b.iter().map(|x| -x).collect();
@@ -374,15 +387,7 @@ fn series_step<P: ContinuationProblem>(
             let t = Instant::now();
             let (k, rl) = problem.tangent(&u_end, l_end)?;
             charge(&mut stats.assembly_s, t);
-            let t = Instant::now();
-            let f = lu.factorize(&k).map_err(|detail| Error::SingularMatrix {
-                step: index,
-                param: "lambda",
-                at: l_end,
-                detail,
-            })?;
-            stats.factorizations += 1;
-            charge(&mut stats.factorization_s, t);
+            let f = factorize(lu, &k, stats, index, l_end)?;
             let ut_c: Vec<f64> = f.solve(&rl.iter().map(|x| -x).collect::<Vec<_>>());
             stats.solves += 1;
             let den = dot(&ut_c, &step.u[1]) + step.lambda[1];

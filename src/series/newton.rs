@@ -13,7 +13,7 @@
 //! The increment grows after fast convergence and is halved on failure. Steps
 //! are cut so that every requested lambda in `targets` is hit exactly.
 
-use super::continuation::ContinuationProblem;
+use super::continuation::{ContinuationProblem, PathResult, factorize};
 use super::stats::{Stats, charge};
 use crate::error::{Error, Result};
 use crate::linalg::{SparseLu, dot, norm};
@@ -57,15 +57,8 @@ impl Default for NewtonConfig {
     }
 }
 
-/// How a Newton run ended.
-#[derive(Debug)]
-pub struct NewtonResult {
-    pub stats: Stats,
-    pub stop: String,
-    pub error: Option<Error>,
-    pub u_end: Vec<f64>,
-    pub lambda_end: f64,
-}
+/// How a Newton run ended: the same record as an ANM run.
+pub type NewtonResult = PathResult;
 
 /// Follows the path from (u0, lambda0) to `cfg.lambda_end`; `on_point` gets
 /// every converged point (U, lambda), including each of `targets` exactly.
@@ -233,15 +226,7 @@ fn tangent_direction<P: ContinuationProblem>(
     let t = Instant::now();
     let (k, rl) = problem.tangent(u, lambda)?;
     charge(&mut stats.assembly_s, t);
-    let t = Instant::now();
-    let f = lu.factorize(&k).map_err(|detail| Error::SingularMatrix {
-        step: index,
-        param: "lambda",
-        at: lambda,
-        detail,
-    })?;
-    stats.factorizations += 1;
-    charge(&mut stats.factorization_s, t);
+    let f = factorize(lu, &k, stats, index, lambda)?;
     let t = Instant::now();
     let ut = f.solve(&rl.iter().map(|x| -x).collect::<Vec<_>>());
     stats.solves += 1;
@@ -298,15 +283,7 @@ fn correct<P: ContinuationProblem>(
                 tolerance: cfg.tol,
             });
         }
-        let t = Instant::now();
-        let f = lu.factorize(&k).map_err(|detail| Error::SingularMatrix {
-            step: index,
-            param: "lambda",
-            at: l,
-            detail,
-        })?;
-        stats.factorizations += 1;
-        charge(&mut stats.factorization_s, t);
+        let f = factorize(lu, &k, stats, index, l)?;
         let t = Instant::now();
         let ur = f.solve(&r.iter().map(|x| -x).collect::<Vec<_>>());
         stats.solves += 1;
