@@ -287,6 +287,46 @@ impl Tape {
     /// Directional derivative of the outputs at the order-0 point (forward
     /// tangent pass on the stored constant terms): returns J * `dx`.
     pub fn jvp(&self, dx: &[f64]) -> Vec<f64> {
+        let dot = self.node_jvp(dx);
+        self.outputs.iter().map(|&o| dot[o]).collect()
+    }
+
+    /// d node / d inputs[col] at the order-0 point, for every node: one
+    /// vector per column.
+    pub fn node_tangents(&self, cols: &[usize]) -> Vec<Vec<f64>> {
+        let mut dx = vec![0.0; self.n_inputs()];
+        cols.iter()
+            .map(|&c| {
+                dx[c] = 1.0;
+                let t = self.node_jvp(&dx);
+                dx[c] = 0.0;
+                t
+            })
+            .collect()
+    }
+
+    /// Adds sum_j tangents[j] * x[j] to coefficient p of every node.
+    ///
+    /// Coefficient p of each node is affine in the inputs' coefficients p,
+    /// with the order-0 derivatives as slopes (every recurrence of
+    /// [`super::taylor`] weights its arguments' top coefficient by the
+    /// derivative at order 0). So after propagating order p with some inputs'
+    /// coefficient p at zero, setting them to x is this update, exactly.
+    pub fn add_to_order(&mut self, p: usize, tangents: &[Vec<f64>], x: &[f64]) {
+        for (t, &xj) in tangents.iter().zip(x) {
+            if xj == 0.0 {
+                continue;
+            }
+            for (i, ti) in t.iter().enumerate() {
+                if *ti != 0.0 {
+                    self.coeffs[i * self.stride + p] += ti * xj;
+                }
+            }
+        }
+    }
+
+    /// Forward tangent pass: d node / d inputs · dx for every node.
+    fn node_jvp(&self, dx: &[f64]) -> Vec<f64> {
         let v = |j: usize| self.coeffs[j * self.stride];
         let mut dot = vec![0.0; self.ops.len()];
         let mut next_input = 0;
@@ -314,21 +354,20 @@ impl Tape {
                 },
             };
         }
-        self.outputs.iter().map(|&o| dot[o]).collect()
+        dot
     }
 
     /// Dense Jacobian d outputs / d inputs[cols] at the order-0 point, row-major.
     pub fn jacobian(&self, cols: &[usize]) -> Vec<Vec<f64>> {
-        let mut jac = vec![vec![0.0; cols.len()]; self.n_outputs()];
-        let mut dx = vec![0.0; self.n_inputs()];
-        for (c, &col) in cols.iter().enumerate() {
-            dx[col] = 1.0;
-            for (row, d) in self.jvp(&dx).into_iter().enumerate() {
-                jac[row][c] = d;
-            }
-            dx[col] = 0.0;
-        }
-        jac
+        self.jacobian_from(&self.node_tangents(cols))
+    }
+
+    /// The Jacobian rows read off node tangents ([`Tape::node_tangents`]).
+    pub fn jacobian_from(&self, tangents: &[Vec<f64>]) -> Vec<Vec<f64>> {
+        self.outputs
+            .iter()
+            .map(|&o| tangents.iter().map(|t| t[o]).collect())
+            .collect()
     }
 }
 
@@ -395,6 +434,36 @@ mod tests {
                     (jac[row][col] - fd).abs() < 1e-8,
                     "J[{row}][{col}] = {} vs {fd}",
                     jac[row][col]
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn linear_update_equals_a_second_propagation() {
+        // Propagating order p with input coefficients x, or with zeros and
+        // then adding the order-0 node tangents times x: identical series.
+        let n = 8;
+        let (mut a, mut b) = (sample(n), sample(n));
+        let x0 = [0.4, 0.7];
+        for t in [&mut a, &mut b] {
+            t.eval(&x0);
+        }
+        let tangents = b.node_tangents(&[0, 1]);
+        for p in 1..=n {
+            let xp = [0.3 / p as f64, -0.2 * p as f64];
+            a.set_input(0, p, xp[0]);
+            a.set_input(1, p, xp[1]);
+            a.propagate(p);
+            b.set_input(0, p, 0.0);
+            b.set_input(1, p, 0.0);
+            b.propagate(p);
+            b.add_to_order(p, &tangents, &xp);
+            for j in 0..2 {
+                let (sa, sb) = (a.output(j, p), b.output(j, p));
+                assert!(
+                    (sa - sb).abs() <= 1e-12 * (1.0 + sa.abs()),
+                    "order {p}, output {j}: {sa} vs {sb}"
                 );
             }
         }
