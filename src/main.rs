@@ -222,39 +222,18 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
                 let Some(sc) = sc else {
                     anyhow::bail!("bench case `{case}` is not available in this build")
                 };
-                let ref_method = if with_ida {
-                    bench::Method::Ida { rtol: 1e-12 }
-                } else {
-                    bench::Method::Anm {
-                        order: 30,
-                        eps: 1e-14,
-                    }
-                };
-                reference_name = format!("{} {}", ref_method.label(), ref_method.setting());
-                let reference = bench::solve(&sc, &ref_method)?;
-                // friction-roller: compare up to 0.05 s before the breakdown.
-                let anm_ref = bench::solve(
-                    &sc,
-                    &bench::Method::Anm {
-                        order: 30,
-                        eps: 1e-14,
-                    },
-                )?;
-                let t_max = if anm_ref.stop == "singularity" {
-                    anm_ref.t_stop - 0.05
-                } else {
-                    sc.t_end
-                };
+                let reference = bench::reference(&sc, with_ida)?;
+                reference_name = reference.name.clone();
                 eprintln!(
-                    "{case}: reference {reference_name}; ANM(30, 1e-14) differs from it by {:.2e} on t <= {t_max:.4}",
-                    bench::error(&anm_ref, &reference, t_max)
+                    "{case}: reference {reference_name}; ANM(30, 1e-14) differs from it by {:.2e} on t <= {:.4}",
+                    reference.anm_floor, reference.t_max
                 );
                 let r = bench::work_precision(
                     case,
                     &sc,
                     &bench::friction_methods(with_ida),
-                    &reference,
-                    t_max,
+                    &reference.solution,
+                    reference.t_max,
                     repeat,
                 );
                 print!("{}", bench::markdown(&r, &reference_name));

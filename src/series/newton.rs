@@ -153,26 +153,15 @@ pub fn run<P: ContinuationProblem>(
         match correct(
             problem, &up, lp, control, &du, dl, cfg, &mut lu, &mut stats, index,
         ) {
-            Ok((un, ln, iterations)) => {
+            // A corrector that converged onto the path behind us (the
+            // increment turns back on the predictor direction) has lost the
+            // path: it is retried with half the increment, like a failure.
+            Ok((un, ln, iterations))
+                if control == Control::Load || !turns_back(&un, ln, &u, lambda, &du, dl) =>
+            {
                 let inc: Vec<f64> = un.iter().zip(&u).map(|(a, b)| a - b).collect();
                 let dln = ln - lambda;
                 let len = (dot(&inc, &inc) + dln * dln).sqrt();
-                // A corrector that converged onto the path behind us (the
-                // increment turns back on the previous direction) has lost
-                // the path: retry with half the increment.
-                if len > 0.0 && dot(&inc, &du) + dln * dl < 0.0 && control == Control::Arclength {
-                    step *= 0.5;
-                    if step < cfg.min_step {
-                        let collapse = Error::StepCollapse {
-                            step: index,
-                            param: "lambda",
-                            at: lambda,
-                            length: step,
-                        };
-                        return done(stats, "", Some(collapse), u, lambda);
-                    }
-                    continue;
-                }
                 stats.steps += 1;
                 if len > 0.0 {
                     dir = Some((inc.iter().map(|x| x / len).collect(), dln / len));
@@ -189,11 +178,12 @@ pub fn run<P: ContinuationProblem>(
                     step = (1.5 * step).min(cfg.max_step);
                 }
             }
-            Err(
-                e @ (Error::NoConvergence { .. }
+            Ok(_)
+            | Err(
+                Error::NoConvergence { .. }
                 | Error::SingularMatrix { .. }
                 | Error::NonFinite { .. }
-                | Error::ContactMissed { .. }),
+                | Error::ContactMissed { .. },
             ) => {
                 step *= 0.5;
                 if step < cfg.min_step {
@@ -203,7 +193,6 @@ pub fn run<P: ContinuationProblem>(
                         at: lambda,
                         length: step,
                     };
-                    let _ = e;
                     return done(stats, "", Some(collapse), u, lambda);
                 }
             }
@@ -211,6 +200,18 @@ pub fn run<P: ContinuationProblem>(
         }
     }
     done(stats, "max_steps", None, u, lambda)
+}
+
+/// Whether the increment from (u, lambda) to (un, ln) points against the
+/// predictor direction (du, dl).
+fn turns_back(un: &[f64], ln: f64, u: &[f64], lambda: f64, du: &[f64], dl: f64) -> bool {
+    let along: f64 = un
+        .iter()
+        .zip(u)
+        .zip(du)
+        .map(|((a, b), d)| (a - b) * d)
+        .sum();
+    along + (ln - lambda) * dl < 0.0
 }
 
 /// Unit tangent (U1, lambda1) at a point: Kt Ut = -R_lambda, oriented forward.

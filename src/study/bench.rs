@@ -329,3 +329,44 @@ pub fn friction_methods(with_ida: bool) -> Vec<Method> {
     }
     m
 }
+
+/// The reference a friction case is measured against, with the comparison
+/// window and how far the tightest ANM run is from it.
+pub struct Reference {
+    pub solution: Solution,
+    /// "IDA rtol=1e-12", or "ANM N=30 eps=1e-14" without the reference feature.
+    pub name: String,
+    /// Errors are taken on t <= t_max: friction-roller stops 0.05 s before
+    /// the breakdown the ANM detects.
+    pub t_max: f64,
+    /// Error of ANM(30, 1e-14) against the reference: the floor of what the
+    /// table can resolve.
+    pub anm_floor: f64,
+}
+
+/// Solves the tightest reference of a friction scene.
+pub fn reference(scene: &FrictionScene, with_ida: bool) -> Result<Reference> {
+    let tight_anm = Method::Anm {
+        order: 30,
+        eps: 1e-14,
+    };
+    let method = if with_ida {
+        Method::Ida { rtol: 1e-12 }
+    } else {
+        tight_anm.clone()
+    };
+    let solution = solve(scene, &method)?;
+    let anm = solve(scene, &tight_anm)?;
+    let t_max = if anm.stop == "singularity" {
+        anm.t_stop - 0.05
+    } else {
+        scene.t_end
+    };
+    let anm_floor = error(&anm, &solution, t_max);
+    Ok(Reference {
+        solution,
+        name: format!("{} {}", method.label(), method.setting()),
+        t_max,
+        anm_floor,
+    })
+}
