@@ -92,6 +92,18 @@ impl Error {
             Error::ContactMissed { .. } => "contact_missed",
         }
     }
+
+    /// Numerical trouble a shorter step may avoid (as opposed to bad input
+    /// or an output failure).
+    pub fn is_numerical(&self) -> bool {
+        matches!(
+            self,
+            Error::NoConvergence { .. }
+                | Error::SingularMatrix { .. }
+                | Error::NonFinite { .. }
+                | Error::ContactMissed { .. }
+        )
+    }
 }
 
 pub type Result<T> = std::result::Result<T, Error>;

@@ -332,26 +332,96 @@ fn series_step<P: ContinuationProblem>(
     {
         step.length = a;
     }
-    let (mut u_end, mut l_end) = step.eval(step.length);
-    if (l_end - cfg.lambda_end) * forward > 0.0 && (l_end - cfg.lambda_end).abs() < 1e-9 {
-        l_end = cfg.lambda_end;
-    }
-    // Residual check at the step end, then arclength-constrained modified
-    // Newton corrections with the step's factorization.
+    // Step end: accept when the residual is small; correct when it is
+    // moderately large; otherwise (or when the correction fails) the step
+    // length overestimated the series' validity (e.g. a contact node closing
+    // within the step): halve it. Halving costs residual evaluations only;
+    // correcting from far off the path can converge onto another branch.
     let scale = norm(&r_lambda).max(f64::MIN_POSITIVE);
+    let mut first = true;
+    loop {
+        let (u_end, mut l_end) = step.eval(step.length);
+        if (l_end - cfg.lambda_end) * forward > 0.0 && (l_end - cfg.lambda_end).abs() < 1e-9 {
+            l_end = cfg.lambda_end;
+        }
+        let attempt = end_point(
+            problem, &step, &fact, &ut, denom, u_end, l_end, scale, cfg, lu, stats,
+        );
+        if first {
+            step.end_residual = attempt.as_ref().map_or(f64::INFINITY, |e| e.residual);
+            first = false;
+        }
+        match attempt {
+            Ok(end) if end.u.iter().all(|x| x.is_finite()) && end.lambda.is_finite() => {
+                step.u_end = end.u;
+                step.lambda_end = end.lambda;
+                return Ok(step);
+            }
+            Ok(_) => {}
+            Err(e) if e.is_numerical() => {
+                if step.length * 0.5 < cfg.min_step || !cfg.correct {
+                    return Err(e);
+                }
+            }
+            Err(e) => return Err(e),
+        }
+        // Padé first falls back to the polynomial, then the length halves.
+        if step.pade.is_some() {
+            step.pade = None;
+            step.length = step.length.min(step.a_poly);
+        } else {
+            step.length *= 0.5;
+        }
+        stats.step_cuts += 1;
+        if step.length < cfg.min_step {
+            return Err(Error::StepCollapse {
+                step: index,
+                param: "lambda",
+                at: lambda0,
+                length: step.length,
+            });
+        }
+    }
+}
+
+/// A step's corrected end point.
+struct EndPoint {
+    u: Vec<f64>,
+    lambda: f64,
+    /// Relative residual before correction.
+    residual: f64,
+}
+
+/// Residual check at (u_end, l_end), then arclength-constrained Newton
+/// corrections <dU, U1> + dl l1 = 0: modified Newton with the step's
+/// factorization while it contracts by 10x per iteration, else refactorized
+/// at the current point (full Newton). A start residual above
+/// [`CORRECTABLE`] is not corrected (`NoConvergence` with 0 iterations).
+#[allow(clippy::too_many_arguments)]
+fn end_point<P: ContinuationProblem>(
+    problem: &mut P,
+    step: &PathStep,
+    fact: &Factorization,
+    ut: &[f64],
+    denom: f64,
+    mut u_end: Vec<f64>,
+    mut l_end: f64,
+    scale: f64,
+    cfg: &ContinuationConfig,
+    lu: &mut SparseLu,
+    stats: &mut Stats,
+) -> Result<EndPoint> {
+    let index = step.index;
     let t = Instant::now();
     let mut r = problem.residual(&u_end, l_end)?;
     stats.residual_evaluations += 1;
     charge(&mut stats.assembly_s, t);
-    step.end_residual = norm(&r) / scale;
-    let mut res = step.end_residual;
+    let mut res = norm(&r) / scale;
+    let start = res;
     let mut it = 0;
-    // Start with the step's factorization (modified Newton); when it does not
-    // contract by at least 10x per iteration, refactorize at the current point
-    // (full Newton). Both keep the arclength constraint <dU, U1> + dl l1 = 0.
     let mut current: Option<(Factorization, Vec<f64>, f64)> = None;
-    while res > cfg.residual_tol {
-        if !cfg.correct || it >= cfg.max_corrections {
+    while res > cfg.residual_tol || !res.is_finite() {
+        if !cfg.correct || it >= cfg.max_corrections || !(res <= CORRECTABLE) {
             return Err(Error::NoConvergence {
                 step: index,
                 param: "lambda",
@@ -361,16 +431,14 @@ fn series_step<P: ContinuationProblem>(
                 tolerance: cfg.residual_tol,
             });
         }
+        let t = Instant::now();
+        let neg: Vec<f64> = r.iter().map(|x| -x).collect();
         let (ub, ut_c, den) = match &current {
-            None => (solve(&r, stats, "correction")?, ut.clone(), denom),
-            Some((f, ut_c, den)) => {
-                let t = Instant::now();
-                let x: Vec<f64> = f.solve(&r.iter().map(|x| -x).collect::<Vec<_>>());
-                stats.solves += 1;
-                charge(&mut stats.solve_s, t);
-                (x, ut_c.clone(), *den)
-            }
+            None => (fact.solve(&neg), ut.to_vec(), denom),
+            Some((f, ut_c, den)) => (f.solve(&neg), ut_c.clone(), *den),
         };
+        stats.solves += 1;
+        charge(&mut stats.solve_s, t);
         let dl = -dot(&ub, &step.u[1]) / den;
         for ((x, b), t) in u_end.iter_mut().zip(&ub).zip(&ut_c) {
             *x += b + dl * t;
@@ -388,22 +456,23 @@ fn series_step<P: ContinuationProblem>(
             let (k, rl) = problem.tangent(&u_end, l_end)?;
             charge(&mut stats.assembly_s, t);
             let f = factorize(lu, &k, stats, index, l_end)?;
+            let t = Instant::now();
             let ut_c: Vec<f64> = f.solve(&rl.iter().map(|x| -x).collect::<Vec<_>>());
             stats.solves += 1;
+            charge(&mut stats.solve_s, t);
             let den = dot(&ut_c, &step.u[1]) + step.lambda[1];
             current = Some((f, ut_c, den));
         }
         res = new_res;
     }
-    if !u_end.iter().all(|x| x.is_finite()) || !l_end.is_finite() {
-        return Err(Error::NonFinite {
-            step: index,
-            param: "lambda",
-            at: lambda0,
-            what: "step end point".into(),
-        });
-    }
-    step.u_end = u_end;
-    step.lambda_end = l_end;
-    Ok(step)
+    Ok(EndPoint {
+        u: u_end,
+        lambda: l_end,
+        residual: start,
+    })
 }
+
+/// Relative residual |R| / |R_lambda| above which a step end is not corrected
+/// but the step shortened: a point this far off the path is outside the
+/// series' validity, and Newton from it may land on another branch.
+const CORRECTABLE: f64 = 1.0;

@@ -150,15 +150,50 @@ pub fn run<P: ContinuationProblem>(
             control = Control::Load;
             hit_target = true;
         }
-        match correct(
+        let converged = match correct(
             problem, &up, lp, control, &du, dl, cfg, &mut lu, &mut stats, index,
         ) {
             // A corrector that converged onto the path behind us (the
             // increment turns back on the predictor direction) has lost the
             // path: it is retried with half the increment, like a failure.
-            Ok((un, ln, iterations))
-                if control == Control::Load || !turns_back(&un, ln, &u, lambda, &du, dl) =>
+            Ok((un, ln, _))
+                if control == Control::Arclength && turns_back(&un, ln, &u, lambda, &du, dl) =>
             {
+                None
+            }
+            Ok(point) => Some(point),
+            Err(e) if e.is_numerical() => None,
+            Err(e) => return done(stats, "", Some(e), u, lambda),
+        };
+        // An arclength corrector may pass the next target: that target is
+        // then solved for by load control from the interpolated point, so
+        // that no output is skipped.
+        let converged = match converged {
+            Some((un, ln, iterations)) if (ln - next) * forward > 0.0 => {
+                let frac = (next - lambda) / (ln - lambda);
+                let start: Vec<f64> = u.iter().zip(&un).map(|(a, b)| a + frac * (b - a)).collect();
+                hit_target = true;
+                match correct(
+                    problem,
+                    &start,
+                    next,
+                    Control::Load,
+                    &du,
+                    dl,
+                    cfg,
+                    &mut lu,
+                    &mut stats,
+                    index,
+                ) {
+                    Ok((ut, lt, it)) => Some((ut, lt, iterations + it)),
+                    Err(e) if e.is_numerical() => None,
+                    Err(e) => return done(stats, "", Some(e), u, lambda),
+                }
+            }
+            other => other,
+        };
+        match converged {
+            Some((un, ln, iterations)) => {
                 let inc: Vec<f64> = un.iter().zip(&u).map(|(a, b)| a - b).collect();
                 let dln = ln - lambda;
                 let len = (dot(&inc, &inc) + dln * dln).sqrt();
@@ -178,25 +213,16 @@ pub fn run<P: ContinuationProblem>(
                     step = (1.5 * step).min(cfg.max_step);
                 }
             }
-            Ok(_)
-            | Err(
-                Error::NoConvergence { .. }
-                | Error::SingularMatrix { .. }
-                | Error::NonFinite { .. }
-                | Error::ContactMissed { .. },
-            ) => {
-                step *= 0.5;
-                if step < cfg.min_step {
-                    let collapse = Error::StepCollapse {
-                        step: index,
-                        param: "lambda",
-                        at: lambda,
-                        length: step,
-                    };
-                    return done(stats, "", Some(collapse), u, lambda);
-                }
-            }
-            Err(e) => return done(stats, "", Some(e), u, lambda),
+            None => step *= 0.5,
+        }
+        if step < cfg.min_step {
+            let collapse = Error::StepCollapse {
+                step: index,
+                param: "lambda",
+                at: lambda,
+                length: step,
+            };
+            return done(stats, "", Some(collapse), u, lambda);
         }
     }
     done(stats, "max_steps", None, u, lambda)

@@ -17,6 +17,8 @@ pub struct Stats {
     pub series_terms: usize,
     /// Newton corrections (iterations) after a series step.
     pub corrections: usize,
+    /// Step lengths halved because the step end was off the path.
+    pub step_cuts: usize,
     /// Seconds spent assembling tangents (and residuals).
     pub assembly_s: f64,
     pub factorization_s: f64,
