@@ -61,6 +61,13 @@ enum Command {
         /// Repetitions per setting (the median time is reported).
         #[arg(long, default_value_t = 3)]
         repeat: usize,
+        /// Scaling study instead of the cases: plate-cylinder strip meshes
+        /// NXxNY (comma-separated, e.g. 40x4,80x8), each run in its own
+        /// process for --scaling-steps steps (scaling.md).
+        #[arg(long, value_delimiter = ',')]
+        scaling: Vec<String>,
+        #[arg(long, default_value_t = 10)]
+        scaling_steps: usize,
         #[arg(short, long, value_name = "DIR")]
         out: PathBuf,
     },
@@ -211,16 +218,31 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
             scenes,
             cases,
             repeat,
+            scaling,
+            scaling_steps,
             out,
         } => {
             use anm::study::bench;
+            if !scaling.is_empty() {
+                return bench_scaling(
+                    &scenes.join("plate-cylinder.toml"),
+                    &scaling,
+                    scaling_steps,
+                    &out,
+                );
+            }
             let with_ida = cfg!(feature = "reference");
             let mut rows = vec![];
             let mut reference_name = String::new();
+            let mut shell_notes = String::new();
             for case in &cases {
-                let (_, sc) = load(&scenes.join(format!("{case}.toml")))?;
+                let path = scenes.join(format!("{case}.toml"));
+                let (_, sc) = load(&path)?;
                 let Some(sc) = sc else {
-                    anyhow::bail!("bench case `{case}` is not available in this build")
+                    let (r, notes) = bench_shell(case, &path, repeat, &out)?;
+                    shell_notes += &notes;
+                    rows.extend(r);
+                    continue;
                 };
                 let reference = bench::reference(&sc, with_ida)?;
                 reference_name = reference.name.clone();
@@ -240,6 +262,11 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
                 rows.extend(r);
             }
             bench::write(&rows, &reference_name, &out)?;
+            if !shell_notes.is_empty() {
+                let file = out.join("bench-shell.md");
+                std::fs::write(&file, &shell_notes)
+                    .with_context(|| format!("writing {}", file.display()))?;
+            }
             println!("outputs in {}", out.display());
             Ok(ExitCode::SUCCESS)
         }
@@ -350,6 +377,87 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
             }
         }
     }
+}
+
+/// The scaling study (`anm bench --scaling 40x4,80x8,...`).
+fn bench_scaling(
+    template: &std::path::Path,
+    sizes: &[String],
+    steps: usize,
+    out: &std::path::Path,
+) -> anyhow::Result<ExitCode> {
+    let parsed: Vec<(usize, usize)> = sizes
+        .iter()
+        .map(|s| {
+            s.split_once('x')
+                .and_then(|(a, b)| Some((a.parse().ok()?, b.parse().ok()?)))
+                .filter(|&(nx, ny): &(usize, usize)| nx >= 1 && ny >= 1)
+                .with_context(|| format!("--scaling: `{s}` is not NXxNY with NX, NY >= 1"))
+        })
+        .collect::<anyhow::Result<_>>()?;
+    if steps == 0 {
+        anyhow::bail!("--scaling-steps must be >= 1");
+    }
+    let exe = std::env::current_exe().context("locating the anm executable")?;
+    let rows = anm::study::scaling::run(&exe, template, &parsed, steps, out, |r| {
+        eprintln!(
+            "{}x{}: {} unknowns, {} steps in {:.2} s, peak {:.0} MiB ({})",
+            r.nx,
+            r.ny,
+            r.dofs,
+            r.steps,
+            r.wall_s,
+            r.peak_rss_bytes / 1048576.0,
+            r.stop
+        )
+    })?;
+    let md = anm::study::scaling::markdown(&rows);
+    std::fs::write(out.join("scaling.md"), &md)
+        .with_context(|| format!("writing {}", out.join("scaling.md").display()))?;
+    print!("{md}");
+    println!("outputs in {}", out.display());
+    Ok(ExitCode::SUCCESS)
+}
+
+/// The plate-cylinder work-precision benchmark of one scene: the rows, and
+/// the reference, target and step-cost notes (printed and returned).
+fn bench_shell(
+    case: &str,
+    path: &std::path::Path,
+    repeat: usize,
+    out: &std::path::Path,
+) -> anyhow::Result<(Vec<anm::study::bench::BenchRow>, String)> {
+    use anm::study::bench_shell as bs;
+    let scene = anm::scene::shell::load(path)?;
+    eprintln!("{case}: reference runs (ANM N=20 eps=1e-12; Newton) ...");
+    let reference = bs::reference(&scene)?;
+    let mut notes = format!(
+        "## {case}\n\nReference: {}; Newton (load control, |R|/|F| <= {:.0e}) differs from it by {:.2e} on uz_A. Output grid: lambda step {}. Wall times are medians of {repeat}.\n",
+        reference.name,
+        bs::REFERENCE_RESIDUAL,
+        reference.floor,
+        bs::LAMBDA_STEP
+    );
+    eprint!("{notes}");
+    let (rows, costs) = bs::work_precision(
+        case,
+        &scene,
+        &bs::methods(),
+        &reference.report,
+        repeat,
+        |_, r| {
+            eprintln!(
+                "  {} {}: error {:.2e}, {:.3} s, {} steps, {} factorizations ({})",
+                r.method, r.setting, r.error, r.wall_s, r.steps, r.factorizations, r.stop
+            )
+        },
+    );
+    notes += &anm::study::bench::markdown(&rows, &reference.name);
+    notes += &bs::targets(&rows, &costs);
+    eprintln!("{case}: skip measurements ...");
+    notes += &bs::skip_markdown(&bs::skip_study(&scene, out)?);
+    print!("{notes}");
+    Ok((rows, notes))
 }
 
 fn load(

@@ -1,4 +1,4 @@
-//! Meshes, node sets and the gmsh .msh 4.1 reader.
+//! Meshes, node sets and the gmsh .msh 4.1 reader and writer.
 //!
 //! A [`Mesh`] is a quadrilateral surface mesh: node positions, 4-node
 //! elements, named node sets (gmsh physical groups) and, when the geometry is
@@ -6,6 +6,7 @@
 //! directors; otherwise the directors are the averaged element normals.
 
 pub mod gmsh;
+pub mod gmsh_write;
 pub mod structured;
 
 use crate::error::{Error, Result};

@@ -54,6 +54,11 @@ pub struct RunReport {
     /// Largest sum of the pulls (eta per node, DESIGN §3) of the candidate
     /// nodes left out of the active set, over all steps (N).
     pub skipped_pull_bound: f64,
+    /// Mean number of candidate nodes carrying contact terms per ANM step
+    /// (those within `contact.search_distance` of an obstacle).
+    pub mean_active_contacts: Option<f64>,
+    /// Peak resident memory of the process so far (Linux VmHWM), bytes.
+    pub peak_rss_bytes: Option<u64>,
     /// history.csv rows: lambda, uz_A, ux_A, rn_B, rn_C, rn_D, rn_total.
     #[serde(skip)]
     pub history: Vec<[f64; 7]>,
@@ -211,6 +216,27 @@ impl Probe<'_> {
     }
 }
 
+/// The state of an accepted step at lambda = g: on the series where it
+/// reaches g; between the series end and the corrected end point (the step
+/// end correction moves lambda by a residual-sized amount) by linear
+/// interpolation of that correction.
+fn state_at(step: &PathStep, g: f64) -> Option<Vec<f64>> {
+    if (g - step.lambda_end).abs() < 1e-12 {
+        return Some(step.u_end.clone());
+    }
+    if let Some(a) = step.a_at_lambda(g) {
+        return Some(step.eval(a).0);
+    }
+    let (u_s, l_s) = step.eval(step.length);
+    let frac = (g - l_s) / (step.lambda_end - l_s);
+    (frac.is_finite() && (0.0..=1.0).contains(&frac)).then(|| {
+        u_s.iter()
+            .zip(&step.u_end)
+            .map(|(a, b)| a + frac * (b - a))
+            .collect()
+    })
+}
+
 /// Runs a loaded scene; `out_dir` None writes nothing (tests).
 pub fn run_loaded(scene: &ShellScene, out_dir: Option<&Path>, progress: bool) -> Result<RunReport> {
     let start = Instant::now();
@@ -240,6 +266,7 @@ pub fn run_loaded(scene: &ShellScene, out_dir: Option<&Path>, progress: bool) ->
     let mut next_grid = 0usize;
     let mut pvd: Vec<(f64, usize, String)> = vec![];
     let mut pull_bound = 0.0f64;
+    let mut active_sum = 0usize;
     let mut last: Option<(Vec<f64>, f64, Vec<usize>)> = None;
     let mut snapshots: Vec<Snapshot> = vec![];
     let snapshot = |lambda: f64, full: &[f64], active: &[usize]| {
@@ -312,6 +339,7 @@ pub fn run_loaded(scene: &ShellScene, out_dir: Option<&Path>, progress: bool) ->
                 );
                 pull_bound =
                     pull_bound.max((probe.pairs.len() - active.len()) as f64 * scene.contact_eta);
+                active_sum += active.len();
                 if step.index == 0 {
                     history.push(probe.row(step.lambda[0], &full0, &active));
                     next_grid = 1;
@@ -323,22 +351,16 @@ pub fn run_loaded(scene: &ShellScene, out_dir: Option<&Path>, progress: bool) ->
                     if g > step.lambda_end + 1e-12 || g > cfg.lambda_end + 1e-12 {
                         break;
                     }
-                    let u = if (g - step.lambda_end).abs() < 1e-12 {
-                        Some(step.u_end.clone())
-                    } else {
-                        // The corrected end point stands for grid values within
-                        // 1e-8 of it: bisection on the series cannot find a root
-                        // that the correction moved past the series' own end.
-                        step.a_at_lambda(g).map(|a| step.eval(a).0).or_else(|| {
-                            ((g - step.lambda_end).abs() < 1e-8).then(|| step.u_end.clone())
-                        })
-                    };
-                    if let Some(u) = u {
-                        let full = probe.expand(&u);
-                        history.push(probe.row(g, &full, &active));
-                        if scene.snapshots.iter().any(|s| (s - g).abs() < 1e-9) {
-                            snapshots.push(snapshot(g, &full, &active));
-                        }
+                    let u = state_at(step, g).ok_or_else(|| {
+                        crate::Error::Output(format!(
+                            "step {}: lambda grid value {g} lies in [{}, {}] but on neither the series nor its correction",
+                            step.index, step.lambda[0], step.lambda_end
+                        ))
+                    })?;
+                    let full = probe.expand(&u);
+                    history.push(probe.row(g, &full, &active));
+                    if scene.snapshots.iter().any(|s| (s - g).abs() < 1e-9) {
+                        snapshots.push(snapshot(g, &full, &active));
                     }
                     next_grid += 1;
                 }
@@ -459,6 +481,9 @@ pub fn run_loaded(scene: &ShellScene, out_dir: Option<&Path>, progress: bool) ->
         stop,
         uz_a_end: uz_end,
         skipped_pull_bound: pull_bound,
+        peak_rss_bytes: crate::output::peak_rss_bytes(),
+        mean_active_contacts: (scene.newton.is_none() && result.stats.steps > 0)
+            .then(|| active_sum as f64 / result.stats.steps as f64),
         history,
         snapshots,
     };

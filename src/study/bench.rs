@@ -134,7 +134,7 @@ pub fn error(sol: &Solution, reference: &Solution, t_max: f64) -> f64 {
     worst
 }
 
-fn median(mut v: Vec<f64>) -> f64 {
+pub(crate) fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(f64::total_cmp);
     v[v.len() / 2]
 }

@@ -1,0 +1,215 @@
+//! Scaling of the shell ANM with the number of unknowns: the plate-cylinder
+//! scene on structured strip meshes nx × ny (6 nx (ny + 1) unknowns), each
+//! run in its own process (`anm run`) so that its peak memory (VmHWM) is its
+//! own, for a fixed number of steps from lambda = 0.
+//!
+//! Reported per size: time per step, total time, the per-step breakdown
+//! (assembly, factorization, solves, series terms) and peak memory; the
+//! exponents b of t = c n^b are fitted by least squares in log-log.
+
+use crate::error::{Error, Result};
+use crate::mesh::{gmsh_write, structured};
+use crate::output::create_dir;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+/// One measured size.
+#[derive(Clone, Debug)]
+pub struct ScalingRow {
+    pub nx: usize,
+    pub ny: usize,
+    pub dofs: usize,
+    pub steps: usize,
+    pub factorizations: usize,
+    pub wall_s: f64,
+    /// Per accepted step: assembly, factorization, solves, series terms (s).
+    pub per_step: [f64; 4],
+    pub peak_rss_bytes: f64,
+    pub stop: String,
+}
+
+impl ScalingRow {
+    pub fn step_s(&self) -> f64 {
+        self.wall_s / self.steps.max(1) as f64
+    }
+}
+
+fn io(file: &Path) -> impl FnOnce(std::io::Error) -> Error + '_ {
+    move |source| Error::Io {
+        file: file.to_path_buf(),
+        source,
+    }
+}
+
+/// The scene `template` (a plate-cylinder TOML) on the nx × ny strip mesh,
+/// stopped after `steps` steps, without VTK or plots; written into `dir`.
+fn write_case(template: &Path, nx: usize, ny: usize, steps: usize, dir: &Path) -> Result<PathBuf> {
+    let mesh = structured::rectangle(0.0, 2.0, -0.1, 0.1, nx, ny);
+    let msh = dir.join(format!("strip-{nx}x{ny}.msh"));
+    gmsh_write::write(&msh, &mesh, "strip", &[("clamp", &mesh.groups["s0"])])?;
+    let text = std::fs::read_to_string(template).map_err(io(template))?;
+    let mut scene: toml::Table = toml::from_str(&text).map_err(|e| Error::Invalid {
+        file: template.to_path_buf(),
+        key: "scene".into(),
+        problem: e.to_string(),
+    })?;
+    let mut set = |table: &str, key: &str, value: toml::Value| {
+        if let Some(t) = scene.get_mut(table).and_then(|t| t.as_table_mut()) {
+            t.insert(key.into(), value);
+        }
+    };
+    set(
+        "mesh",
+        "file",
+        toml::Value::String(msh.display().to_string()),
+    );
+    set(
+        "mesh",
+        "clamp",
+        toml::Value::Array(vec![toml::Value::String("clamp".into())]),
+    );
+    set("mesh", "contact", toml::Value::String("strip".into()));
+    set("solver", "max_steps", toml::Value::Integer(steps as i64));
+    set("output", "vtk_every", toml::Value::Integer(0));
+    set("output", "plot", toml::Value::Boolean(false));
+    let path = dir.join(format!("scene-{nx}x{ny}.toml"));
+    let out = toml::to_string(&scene).map_err(|e| Error::Output(e.to_string()))?;
+    std::fs::write(&path, out).map_err(io(&path))?;
+    Ok(path)
+}
+
+/// Runs each size in a child `exe run` process and reads its summary.json.
+pub fn run(
+    exe: &Path,
+    template: &Path,
+    sizes: &[(usize, usize)],
+    steps: usize,
+    dir: &Path,
+    mut progress: impl FnMut(&ScalingRow),
+) -> Result<Vec<ScalingRow>> {
+    create_dir(dir)?;
+    let mut rows = vec![];
+    for &(nx, ny) in sizes {
+        let scene = write_case(template, nx, ny, steps, dir)?;
+        let out = dir.join(format!("run-{nx}x{ny}"));
+        let status = Command::new(exe)
+            .arg("run")
+            .arg(&scene)
+            .arg("-o")
+            .arg(&out)
+            .arg("--quiet")
+            .output()
+            .map_err(io(exe))?;
+        let summary = out.join("summary.json");
+        let text = std::fs::read_to_string(&summary).map_err(|e| {
+            Error::Output(format!(
+                "{}: no summary ({e}); the run printed: {}",
+                scene.display(),
+                String::from_utf8_lossy(&status.stderr)
+            ))
+        })?;
+        let v: serde_json::Value =
+            serde_json::from_str(&text).map_err(|e| Error::Output(format!("{e}")))?;
+        let num = |k: &str| v["stats"][k].as_f64().unwrap_or(f64::NAN);
+        let steps_done = v["steps"].as_u64().unwrap_or(0) as usize;
+        let per = |k: &str| num(k) / steps_done.max(1) as f64;
+        let row = ScalingRow {
+            nx,
+            ny,
+            dofs: v["dofs"].as_u64().unwrap_or(0) as usize,
+            steps: steps_done,
+            factorizations: v["factorizations"].as_u64().unwrap_or(0) as usize,
+            wall_s: v["wall_s"].as_f64().unwrap_or(f64::NAN),
+            per_step: [
+                per("assembly_s"),
+                per("factorization_s"),
+                per("solve_s"),
+                per("series_s"),
+            ],
+            peak_rss_bytes: v["peak_rss_bytes"].as_f64().unwrap_or(f64::NAN),
+            stop: v["stop"]["reason"].as_str().unwrap_or("?").to_string(),
+        };
+        progress(&row);
+        rows.push(row);
+    }
+    Ok(rows)
+}
+
+/// Least-squares slope b of log y = a + b log x.
+pub fn exponent(points: &[(f64, f64)]) -> f64 {
+    let logs: Vec<(f64, f64)> = points
+        .iter()
+        .filter(|(x, y)| *x > 0.0 && *y > 0.0 && y.is_finite())
+        .map(|(x, y)| (x.ln(), y.ln()))
+        .collect();
+    let n = logs.len() as f64;
+    if n < 2.0 {
+        return f64::NAN;
+    }
+    let (sx, sy) = logs
+        .iter()
+        .fold((0.0, 0.0), |(a, b), (x, y)| (a + x, b + y));
+    let (mx, my) = (sx / n, sy / n);
+    let (num, den) = logs.iter().fold((0.0, 0.0), |(a, b), (x, y)| {
+        (a + (x - mx) * (y - my), b + (x - mx) * (x - mx))
+    });
+    num / den
+}
+
+/// The scaling table with fitted exponents.
+pub fn markdown(rows: &[ScalingRow]) -> String {
+    let mut s = String::from(
+        "| mesh | unknowns | steps | total (s) | per step (s) | per step: assembly / factorization / solves / series (ms) | step / (factorization + N solves) | peak memory (MiB) | stop |\n|---|---|---|---|---|---|---|---|---|\n",
+    );
+    for r in rows {
+        let unit = r.per_step[1] * r.steps as f64 / r.factorizations.max(1) as f64;
+        s += &format!(
+            "| {}×{} | {} | {} | {:.2} | {:.4} | {:.2} / {:.2} / {:.2} / {:.2} | {:.2} | {:.0} | {} |\n",
+            r.nx,
+            r.ny,
+            r.dofs,
+            r.steps,
+            r.wall_s,
+            r.step_s(),
+            1e3 * r.per_step[0],
+            1e3 * r.per_step[1],
+            1e3 * r.per_step[2],
+            1e3 * r.per_step[3],
+            r.step_s() / (unit + r.per_step[2]),
+            r.peak_rss_bytes / 1048576.0,
+            r.stop
+        );
+    }
+    let fit = |f: &dyn Fn(&ScalingRow) -> f64| {
+        exponent(
+            &rows
+                .iter()
+                .map(|r| (r.dofs as f64, f(r)))
+                .collect::<Vec<_>>(),
+        )
+    };
+    s += &format!(
+        "\nFitted exponents b in cost ∝ n^b (n unknowns): time per step {:.2}, factorization {:.2}, solves {:.2}, series terms {:.2}, assembly {:.2}, peak memory {:.2}.\n",
+        fit(&|r| r.step_s()),
+        fit(&|r| r.per_step[1]),
+        fit(&|r| r.per_step[2]),
+        fit(&|r| r.per_step[3]),
+        fit(&|r| r.per_step[0]),
+        fit(&|r| r.peak_rss_bytes),
+    );
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn exponent_of_a_power_law() {
+        let pts: Vec<(f64, f64)> = [1e3, 1e4, 1e5]
+            .iter()
+            .map(|&n: &f64| (n, 3.0 * n.powf(1.5)))
+            .collect();
+        assert!((exponent(&pts) - 1.5).abs() < 1e-12);
+    }
+}
