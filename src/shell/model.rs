@@ -14,16 +14,17 @@
 //! polynomial, its series term is −Σ_{r=1}^{p−1} λ_r m × w_{p−r}.
 //!
 //! Series (order p ≥ 2, U_p = λ_p = 0): element convolutions
-//! (see [`super::element`]), the follower term above, and per contact pair
+//! in nodal Gram form (see [`super::series`]), the follower term above, and per contact pair
 //! the Taylor propagation of h, n (obstacle::GapSeries) and R (eq. 3,
 //! NormalLaw::force_coeff), force coefficient Σ_{r=0}^{p} R_r n_{p−r}.
 
 // Node/dof/component loops read better with explicit indices.
 #![allow(clippy::needless_range_loop)]
 
-use super::element::{ElementSeries, ShellElement};
+use super::element::ShellElement;
 use super::kinematics::Vec3;
 use super::material::Material;
+use super::series::ElementSeries;
 use crate::contact::obstacle::{GapSeries, Obstacle};
 use crate::contact::search::{self, ContactPair};
 use crate::error::{Error, Result};
@@ -322,7 +323,7 @@ impl ShellModel {
             .iter()
             .map(|e| {
                 let (x, d) = self.element_state(e, &full, false);
-                e.series_start(&x, &d)
+                ElementSeries::start(e, &x, &d)
             })
             .collect();
         let mut ps = Vec::with_capacity(self.active.len());
@@ -347,7 +348,7 @@ impl ShellModel {
         for (e, st) in self.elements.iter().zip(self.el_series.iter_mut()) {
             let x = std::array::from_fn(|i| Self::vec3(&full, e.nodes[i], 0));
             let d = std::array::from_fn(|i| Self::vec3(&full, e.nodes[i], 3));
-            e.series_complete(st, &x, &d);
+            st.complete(e, &x, &d);
         }
         for ps in &mut self.pair_series {
             let pair = &self.pairs[ps.pair];
@@ -450,7 +451,7 @@ impl ContinuationProblem for ShellModel {
         self.complete_order(&u[p - 1]);
         let mut rhs = vec![0.0; self.free.len()];
         for (e, st) in self.elements.iter().zip(&self.el_series) {
-            let f = e.series_rhs(st);
+            let f = st.rhs(e);
             for (i, &n) in e.nodes.iter().enumerate() {
                 for k in 0..6 {
                     rhs[6 * n + k] += f[6 * i + k];
