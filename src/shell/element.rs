@@ -29,10 +29,11 @@
 // Node/dof/component loops read better with explicit indices.
 #![allow(clippy::needless_range_loop)]
 
-use nalgebra::{Matrix3, SMatrix, SVector};
+use nalgebra::{Matrix3, SMatrix};
 
 use super::kinematics::{
-    BMatrix, NDOF_EL, NSTRAIN, Point, PointVectors, Strain, Sym8, Vec3, strain,
+    NDOF_EL, NSTRAIN, NSYM, NodalVectors, PackedSym, Point, PointVectors, SYM_INDEX, SYM_PAIRS,
+    Strain, Sym8, Vec3, pack, strain, unpack,
 };
 use super::material::{DMatrix, Material};
 use crate::error::{Error, Result};
@@ -42,36 +43,9 @@ pub const NEAS: usize = 5;
 type GMatrix = SMatrix<f64, NSTRAIN, NEAS>;
 pub type ElementMatrix = SMatrix<f64, NDOF_EL, NDOF_EL>;
 
-/// Entries of a symmetric 8×8 matrix: its upper triangle, row by row.
-const NSYM: usize = 36;
-const SYM_PAIRS: [(usize, usize); NSYM] = {
-    let mut pairs = [(0, 0); NSYM];
-    let (mut a, mut k) = (0, 0);
-    while a < 8 {
-        let mut b = a;
-        while b < 8 {
-            pairs[k] = (a, b);
-            k += 1;
-            b += 1;
-        }
-        a += 1;
-    }
-    pairs
-};
 type GeometricMap = SMatrix<f64, NSYM, NSYM>;
-
-fn pack(m: &Sym8) -> SVector<f64, NSYM> {
-    SVector::from_fn(|k, _| m[SYM_PAIRS[k]])
-}
-
-fn unpack(v: &SVector<f64, NSYM>) -> Sym8 {
-    let mut m = Sym8::zeros();
-    for (k, &(a, b)) in SYM_PAIRS.iter().enumerate() {
-        m[(a, b)] = v[k];
-        m[(b, a)] = v[k];
-    }
-    m
-}
+/// Packed Kg of the Gram change YᵀδY + δYᵀY, per element unknown.
+pub type GramJacobian = SMatrix<f64, NSYM, NDOF_EL>;
 
 /// Sampling points: 0..4 Gauss points, 4..8 ANS edge midpoints A, B, C, D,
 /// 8..12 corners.
@@ -253,7 +227,7 @@ impl ShellElement {
     /// Σ_r Y_rᵀY_(p−r), Kg_p Y_0 + … is the order-p internal force
     /// (B(x)ᵀσ = Y Kg(σ)).
     pub fn gram_geometric(&self, m: &Sym8) -> Sym8 {
-        unpack(&(*self.kmap * pack(m)))
+        unpack(&(self.kmap.as_ref() * pack(m)))
     }
 
     /// Kg(σ) of the stresses at the state (x, d), computed pointwise from
@@ -300,14 +274,10 @@ impl ShellElement {
         std::array::from_fn(|i| self.pts[i].vectors(x, d))
     }
 
-    /// Condensed internal force f = ∫ Bᵀ s dA and, if asked, the condensed
-    /// tangent, at current nodal positions `x` and directors `d`.
-    pub fn internal(
-        &self,
-        x: &[Vec3; 4],
-        d: &[Vec3; 4],
-        want_k: bool,
-    ) -> ([f64; NDOF_EL], Option<ElementMatrix>) {
+    /// Condensed internal force f = ∫ Bᵀ s dA at current nodal positions
+    /// `x` and directors `d`. The tangent is the order-1 operator of the
+    /// element series ([`super::series::ElementSeries::tangent`]).
+    pub fn internal(&self, x: &[Vec3; 4], d: &[Vec3; 4]) -> [f64; NDOF_EL] {
         let xv = self.vectors(x, d);
         let e_pt: [Strain; NPT] = std::array::from_fn(|i| strain(&xv[i], &self.ref_vec[i]));
         let (sig, _) = self.stresses(&e_pt);
@@ -315,38 +285,30 @@ impl ShellElement {
         for i in 0..NPT {
             self.pts[i].bt_sigma(&xv[i], &sig[i], &mut f);
         }
-        if !want_k {
-            return (f, None);
-        }
-        let b_pt: Vec<BMatrix> = (0..NPT).map(|i| self.pts[i].bmatrix(&xv[i])).collect();
-        let mut k = ElementMatrix::zeros();
-        let mut l = SMatrix::<f64, NDOF_EL, NEAS>::zeros();
-        for gp in &self.gps {
-            let mut b = BMatrix::zeros();
-            for c in 0..NSTRAIN {
-                for &(i, w) in &gp.comb[c] {
-                    for j in 0..NDOF_EL {
-                        b[(c, j)] += w * b_pt[i][(c, j)];
-                    }
+        f
+    }
+
+    /// The linear map from the element unknowns δY to the packed
+    /// K(YᵀδY + δYᵀY): the change of Kg(σ) along δY at the nodal vectors Y.
+    /// The column of the unknown (dim, b) has YᵀδY + δYᵀY nonzero in row
+    /// and column b only, so it sums 8 of the 36 columns of K.
+    pub fn gram_jacobian(&self, y: &NodalVectors) -> GramJacobian {
+        let mut t = GramJacobian::zeros();
+        for b in 0..8 {
+            for dim in 0..3 {
+                let mut col = PackedSym::zeros();
+                for a in 0..8 {
+                    // (YᵀδY + δYᵀY)_ab = Y[dim, a], doubled on the diagonal.
+                    let w = if a == b {
+                        2.0 * y[(dim, a)]
+                    } else {
+                        y[(dim, a)]
+                    };
+                    col.axpy(w, &self.kmap.column(SYM_INDEX[a][b]), 1.0);
                 }
-            }
-            let db = gp.d * b;
-            k += b.transpose() * db * gp.da;
-            l += db.transpose() * gp.g * gp.da;
-        }
-        k -= l * self.hinv * l.transpose();
-        let kg = self.geometric(&sig);
-        for a in 0..8 {
-            for b in 0..8 {
-                let v = kg[(a, b)];
-                if v != 0.0 {
-                    let (ia, ib) = ((a / 2) * 6 + (a % 2) * 3, (b / 2) * 6 + (b % 2) * 3);
-                    for dim in 0..3 {
-                        k[(ia + dim, ib + dim)] += v;
-                    }
-                }
+                t.set_column(3 * b + dim, &col);
             }
         }
-        (f, Some(k))
+        t
     }
 }

@@ -24,7 +24,7 @@
 // Node/dof/component loops read better with explicit indices.
 #![allow(clippy::needless_range_loop)]
 
-use nalgebra::{SMatrix, Vector3};
+use nalgebra::{SMatrix, SVector, Vector3};
 
 /// Number of strain components: (E⁰, E¹) × (11, 22, 12, 13, 23, 33), tensor
 /// (not engineering) components in the natural covariant basis.
@@ -44,6 +44,49 @@ pub type NodalVectors = SMatrix<f64, 3, 8>;
 /// A symmetric matrix over the columns of Y: a nodal Gram matrix YᵀY or a
 /// geometric stiffness (the 24×24 block is this ⊗ I3).
 pub type Sym8 = SMatrix<f64, 8, 8>;
+
+/// Entries of a symmetric 8×8 matrix: its upper triangle, row by row.
+pub const NSYM: usize = 36;
+pub type PackedSym = SVector<f64, NSYM>;
+pub const SYM_PAIRS: [(usize, usize); NSYM] = {
+    let mut pairs = [(0, 0); NSYM];
+    let (mut a, mut k) = (0, 0);
+    while a < 8 {
+        let mut b = a;
+        while b < 8 {
+            pairs[k] = (a, b);
+            k += 1;
+            b += 1;
+        }
+        a += 1;
+    }
+    pairs
+};
+/// SYM_INDEX[a][b]: position of the pair (a, b) or (b, a) in SYM_PAIRS.
+pub const SYM_INDEX: [[usize; 8]; 8] = {
+    let mut index = [[0; 8]; 8];
+    let mut k = 0;
+    while k < NSYM {
+        let (a, b) = SYM_PAIRS[k];
+        index[a][b] = k;
+        index[b][a] = k;
+        k += 1;
+    }
+    index
+};
+
+pub fn pack(m: &Sym8) -> PackedSym {
+    PackedSym::from_fn(|k, _| m[SYM_PAIRS[k]])
+}
+
+pub fn unpack(v: &PackedSym) -> Sym8 {
+    let mut m = Sym8::zeros();
+    for (k, &(a, b)) in SYM_PAIRS.iter().enumerate() {
+        m[(a, b)] = v[k];
+        m[(b, a)] = v[k];
+    }
+    m
+}
 
 /// Y from the nodal positions (or their coefficients) and directors.
 pub fn nodal_vectors(x: &[Vec3; 4], d: &[Vec3; 4]) -> NodalVectors {

@@ -235,7 +235,7 @@ impl ShellModel {
         let mut r = vec![0.0; full.len()];
         for e in &self.elements {
             let (x, d) = self.element_state(e, full, false);
-            let (f, _) = e.internal(&x, &d, false);
+            let f = e.internal(&x, &d);
             for (i, &n) in e.nodes.iter().enumerate() {
                 for k in 0..6 {
                     r[6 * n + k] += f[6 * i + k];
@@ -315,6 +315,8 @@ impl ShellModel {
         &self.active
     }
 
+    /// Order 0 of the step's series at u0: element series (which also give
+    /// the element tangents) and contact pair series.
     fn start_series(&mut self, u0: &[f64]) -> Result<()> {
         let full = self.expand(u0);
         self.series_u0 = u0.to_vec();
@@ -376,16 +378,17 @@ impl ContinuationProblem for ShellModel {
     fn tangent(&mut self, u: &[f64], lambda: f64) -> Result<(SparseMatrix, Vec<f64>)> {
         let full = self.expand(u);
         self.update_active(&full);
+        self.start_series(u)?;
         let mut k = SparseMatrix::new(self.ndof);
+        k.entries
+            .reserve(576 * self.elements.len() + 9 * (self.follower.len() + self.active.len()));
         let mut add = |free: &[Option<usize>], gi: usize, gj: usize, v: f64| {
             if let (Some(i), Some(j)) = (free[gi], free[gj]) {
                 k.add(i, j, v);
             }
         };
-        for e in &self.elements {
-            let (x, d) = self.element_state(e, &full, false);
-            let (_, ke) = e.internal(&x, &d, true);
-            let ke = ke.expect("tangent requested");
+        for (e, st) in self.elements.iter().zip(&self.el_series) {
+            let ke = st.tangent();
             for a in 0..24 {
                 let ga = 6 * e.nodes[a / 6] + a % 6;
                 for b in 0..24 {
@@ -431,12 +434,24 @@ impl ContinuationProblem for ShellModel {
                 }
             }
         }
-        Self::check_finite(
-            &k.entries.iter().map(|t| t.val).collect::<Vec<_>>(),
-            lambda,
-            "tangent matrix",
-        )?;
-        self.start_series(u)?;
+        if let Some(t) = k.entries.iter().find(|t| !t.val.is_finite()) {
+            let i = self
+                .free
+                .iter()
+                .position(|f| *f == Some(t.row))
+                .unwrap_or(0);
+            return Err(Error::NonFinite {
+                step: 0,
+                param: "lambda",
+                at: lambda,
+                what: format!(
+                    "tangent matrix (entry {}: node {}, dof {})",
+                    t.row,
+                    i / 6,
+                    i % 6
+                ),
+            });
+        }
         Ok((k, self.reduce(&rl)))
     }
 
@@ -450,7 +465,7 @@ impl ContinuationProblem for ShellModel {
         }
         self.complete_order(&u[p - 1]);
         let mut rhs = vec![0.0; self.free.len()];
-        for (e, st) in self.elements.iter().zip(&self.el_series) {
+        for (e, st) in self.elements.iter().zip(&mut self.el_series) {
             let f = st.rhs(e);
             for (i, &n) in e.nodes.iter().enumerate() {
                 for k in 0..6 {

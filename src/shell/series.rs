@@ -25,15 +25,20 @@
 //! products Y_0ᵀY_p and Y_0 Kg stay at the scale of the element, not of its
 //! distance from the origin.
 
-use super::element::ShellElement;
-use super::kinematics::{NDOF_EL, NodalVectors, Sym8, Vec3, nodal_vectors};
+use super::element::{ElementMatrix, GramJacobian, ShellElement};
+use super::kinematics::{NDOF_EL, NodalVectors, Sym8, Vec3, nodal_vectors, unpack};
 
 /// Series of one element over an ANM step: nodal vectors and geometric
 /// stiffnesses of every complete order.
-#[derive(Clone, Default)]
+#[derive(Clone)]
 pub struct ElementSeries {
     y: Vec<NodalVectors>,
     kg: Vec<Sym8>,
+    /// T = K(Y_0ᵀδY + δYᵀY_0) per unknown: the order-1 map, which gives
+    /// the tangent and completes an order, Kg_p = Kg*_p + T q_p.
+    t: Box<GramJacobian>,
+    /// Kg*_p = K(M*_p) of the last right-hand side, with its order p.
+    kg_star: Option<(usize, Sym8)>,
 }
 
 /// Σ_{r=lo}^{p−lo} Y_rᵀ Y_{p−r}, symmetric: each pair (r, p−r) once.
@@ -55,10 +60,12 @@ impl ElementSeries {
     /// Order 0 at the state (x0, d0).
     pub fn start(e: &ShellElement, x0: &[Vec3; 4], d0: &[Vec3; 4]) -> Self {
         let centre = x0.iter().sum::<Vec3>() / 4.0;
-        let shifted = x0.map(|x| x - centre);
+        let y0 = nodal_vectors(&x0.map(|x| x - centre), d0);
         Self {
-            y: vec![nodal_vectors(&shifted, d0)],
+            t: Box::new(e.gram_jacobian(&y0)),
+            y: vec![y0],
             kg: vec![e.state_geometric(x0, d0)],
+            kg_star: None,
         }
     }
 
@@ -66,23 +73,53 @@ impl ElementSeries {
         self.y.len()
     }
 
-    /// Completes order m = orders() from the order-m nodal increments.
+    /// The condensed tangent at the step start, f_1 = K_t q_1:
+    /// δf = δY Kg_0 + Y_0 K(Y_0ᵀδY + δYᵀY_0), the geometric part Kg_0 ⊗ I3
+    /// and the material part Y_0 T.
+    pub fn tangent(&self) -> ElementMatrix {
+        let (y0, kg0) = (&self.y[0], &self.kg[0]);
+        let mut k = ElementMatrix::zeros();
+        for (j, t) in self.t.column_iter().enumerate() {
+            let df = y0 * unpack(&t.into_owned());
+            k.column_mut(j).copy_from_slice(df.as_slice());
+        }
+        for a in 0..8 {
+            for b in 0..8 {
+                for dim in 0..3 {
+                    k[(3 * a + dim, 3 * b + dim)] += kg0[(a, b)];
+                }
+            }
+        }
+        k
+    }
+
+    /// Completes order m = orders() from the order-m nodal increments:
+    /// Kg_m = K(M*_m) + T q_m, with K(M*_m) from the right-hand side of
+    /// order m when it was computed.
     pub fn complete(&mut self, e: &ShellElement, xm: &[Vec3; 4], dm: &[Vec3; 4]) {
-        self.y.push(nodal_vectors(xm, dm));
-        let m = self.y.len() - 1;
-        self.kg
-            .push(e.gram_geometric(&gram_convolution(&self.y, m, 0)));
+        let m = self.y.len();
+        let kg_star = match self.kg_star.take() {
+            Some((p, kg)) if p == m => kg,
+            _ if m == 1 => Sym8::zeros(),
+            _ => e.gram_geometric(&gram_convolution(&self.y, m, 1)),
+        };
+        let ym = nodal_vectors(xm, dm);
+        let q = nalgebra::SVector::<f64, NDOF_EL>::from_column_slice(ym.as_slice());
+        self.kg.push(kg_star + unpack(&(self.t.as_ref() * q)));
+        self.y.push(ym);
     }
 
     /// The element right-hand side f*_p of order p = orders(), in the
     /// element unknown layout (v, w per node).
-    pub fn rhs(&self, e: &ShellElement) -> [f64; NDOF_EL] {
+    pub fn rhs(&mut self, e: &ShellElement) -> [f64; NDOF_EL] {
         let p = self.y.len();
         let y = &self.y;
-        let mut f = y[0] * e.gram_geometric(&gram_convolution(y, p, 1));
+        let kg_star = e.gram_geometric(&gram_convolution(y, p, 1));
+        let mut f = y[0] * kg_star;
         for (yr, kg) in y[1..].iter().zip(self.kg[1..].iter().rev()) {
             f += yr * kg;
         }
+        self.kg_star = Some((p, kg_star));
         let mut out = [0.0; NDOF_EL];
         out.copy_from_slice(f.as_slice());
         out
@@ -159,14 +196,14 @@ mod tests {
             .iter()
             .map(|&a| {
                 let (x, d) = at(a);
-                e.internal(&x, &d, false).0
+                e.internal(&x, &d)
             })
             .collect();
         let coeff = |p: usize| -> SVector<f64, NDOF_EL> {
             SVector::from_fn(|k, _| (0..7).map(|j| vinv[(p, j)] * forces[j][k]).sum())
         };
-        let (_, kt) = e.internal(&xs0, &ds0, true);
-        let kt = kt.unwrap();
+        let mut st = ElementSeries::start(&e, &xs0, &ds0);
+        let kt = st.tangent();
         let q = |p: usize| -> SVector<f64, NDOF_EL> {
             if p > 2 {
                 return SVector::zeros();
@@ -174,11 +211,20 @@ mod tests {
             let y = nodal_vectors(&ys[p - 1].0, &ys[p - 1].1);
             SVector::from_column_slice(y.as_slice())
         };
-        let mut st = ElementSeries::start(&e, &xs0, &ds0);
         st.complete(&e, &ys[0].0, &ys[0].1);
         let scale = coeff(1).norm();
         for p in 2..=6 {
             let rhs = SVector::<f64, NDOF_EL>::from_column_slice(&st.rhs(&e));
+            if p == 4 {
+                // The other path to Kg_p: without the right-hand side's K(M*_p).
+                let mut fresh = st.clone();
+                fresh.kg_star = None;
+                fresh.complete(&e, &[Vec3::zeros(); 4], &[Vec3::zeros(); 4]);
+                let mut via_rhs = st.clone();
+                via_rhs.complete(&e, &[Vec3::zeros(); 4], &[Vec3::zeros(); 4]);
+                let diff = (fresh.kg[p] - via_rhs.kg[p]).norm() / via_rhs.kg[p].norm();
+                assert!(diff < 1e-13, "Kg_{p} by two paths: {diff:.3e}");
+            }
             let err = (rhs + kt * q(p) - coeff(p)).norm() / scale;
             assert!(err < 1e-10, "order {p}: relative error {err:.3e}");
             let (xp, dp) = if p <= 2 {
