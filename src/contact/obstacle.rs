@@ -95,8 +95,9 @@ impl Obstacle {
 #[derive(Clone, Debug)]
 pub struct GapSeries {
     obstacle_kind: Kind,
-    /// y_r (cylinder: P x_r shifted; plane: x_r).
-    y: Vec<Vec3>,
+    /// Components of y_r (cylinder: P x_r shifted; plane: x_r), one series
+    /// per component as the Taylor rules take them.
+    y: [Vec<f64>; 3],
     d2: Vec<f64>,
     d: Vec<f64>,
     n: [Vec<f64>; 3],
@@ -127,7 +128,7 @@ impl GapSeries {
         let d = y0.norm();
         Some(Self {
             obstacle_kind: kind,
-            y: vec![y0],
+            y: [vec![y0[0]], vec![y0[1]], vec![y0[2]]],
             d2: vec![d * d],
             d: vec![d],
             n: [vec![g.n[0]], vec![g.n[1]], vec![g.n[2]]],
@@ -136,17 +137,23 @@ impl GapSeries {
     }
 
     pub fn orders(&self) -> usize {
-        self.y.len()
+        self.h.len()
+    }
+
+    fn push_y(&mut self, y: &Vec3) {
+        for k in 0..3 {
+            self.y[k].push(y[k]);
+        }
     }
 
     /// Order-p coefficients (h_p, n_p) given x_p; pushes them if `keep`.
     fn order(&mut self, xp: &Vec3, keep: bool) -> (f64, Vec3) {
-        let p = self.y.len();
+        let p = self.orders();
         match self.obstacle_kind.clone() {
             Kind::Plane(_, nrm) => {
                 let hp = xp.dot(&nrm);
                 if keep {
-                    self.y.push(*xp);
+                    self.push_y(xp);
                     self.d2.push(0.0);
                     self.d.push(0.0);
                     for k in 0..3 {
@@ -157,16 +164,16 @@ impl GapSeries {
                 (hp, Vec3::zeros())
             }
             Kind::Cylinder(pm, _) => {
-                let yp = pm * xp;
-                self.y.push(yp);
-                let d2p: f64 = (0..=p).map(|r| self.y[r].dot(&self.y[p - r])).sum();
+                self.push_y(&(pm * xp));
+                let d2p: f64 = (0..=p)
+                    .map(|r| (0..3).map(|k| self.y[k][r] * self.y[k][p - r]).sum::<f64>())
+                    .sum();
                 self.d2.push(d2p);
                 let dp = sqrt_coeff(&self.d2, &self.d, p);
                 self.d.push(dp);
                 let mut np = Vec3::zeros();
                 for k in 0..3 {
-                    let yk: Vec<f64> = self.y.iter().map(|v| v[k]).collect();
-                    np[k] = div_coeff(&yk, &self.d, &self.n[k], p);
+                    np[k] = div_coeff(&self.y[k], &self.d, &self.n[k], p);
                 }
                 if keep {
                     for k in 0..3 {
@@ -174,7 +181,9 @@ impl GapSeries {
                     }
                     self.h.push(dp);
                 } else {
-                    self.y.pop();
+                    for k in 0..3 {
+                        self.y[k].pop();
+                    }
                     self.d2.pop();
                     self.d.pop();
                 }

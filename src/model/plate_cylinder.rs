@@ -10,7 +10,8 @@
 //!   sums of the nodal normal reactions R over the node rows at the scene's
 //!   `contact_rows` x, rn_total over all contact nodes;
 //! - `summary.json`: the [`RunReport`] (steps, factorizations, solves, wall
-//!   time, stop reason and lambda);
+//!   time, the cost of a step part by part ([`StepCost`]), stop reason and
+//!   lambda);
 //! - `plot.svg`: uz_A and the contact forces versus lambda;
 //! - `contact_final.csv`: per-node gap, reaction R and force R n of the
 //!   active contact nodes at the last point (node numbers 1-based);
@@ -48,6 +49,7 @@ pub struct RunReport {
     pub corrections: usize,
     pub wall_s: f64,
     pub stats: Stats,
+    pub step_cost: StepCost,
     pub stop: Stop,
     /// uz at the probe at the last accepted point.
     pub uz_a_end: f64,
@@ -65,6 +67,42 @@ pub struct RunReport {
     /// Full mid-surface fields at the scene's snapshot lambdas.
     #[serde(skip)]
     pub snapshots: Vec<Snapshot>,
+}
+
+/// What an ANM step costs on average over the run, from the engine's
+/// counters (milliseconds), against the target step <= 1.5 x (one
+/// factorization + N solves).
+#[derive(Clone, Debug, Serialize)]
+pub struct StepCost {
+    /// Tangents and residuals assembled, per step.
+    pub assembly_per_step_ms: f64,
+    pub factorization_ms: f64,
+    pub solve_ms: f64,
+    pub series_term_ms: f64,
+    /// All timed work (assembly, factorizations, solves, series) per step.
+    pub step_ms: f64,
+    /// step_ms / (factorization_ms + N solve_ms).
+    pub ratio: f64,
+}
+
+impl StepCost {
+    pub fn new(s: &Stats, order: usize) -> Self {
+        let per = |t: f64, n: usize| 1e3 * t / n.max(1) as f64;
+        let factorization_ms = per(s.factorization_s, s.factorizations);
+        let solve_ms = per(s.solve_s, s.solves);
+        let step_ms = per(
+            s.assembly_s + s.factorization_s + s.solve_s + s.series_s,
+            s.steps,
+        );
+        Self {
+            assembly_per_step_ms: per(s.assembly_s, s.steps),
+            factorization_ms,
+            solve_ms,
+            series_term_ms: per(s.series_s, s.series_terms),
+            step_ms,
+            ratio: step_ms / (factorization_ms + order as f64 * solve_ms),
+        }
+    }
 }
 
 /// The mid-surface at one lambda: per node, reference position, displacement,
@@ -477,6 +515,7 @@ pub fn run_loaded(scene: &ShellScene, out_dir: Option<&Path>, progress: bool) ->
         solves: stats.solves,
         corrections: stats.corrections,
         wall_s: start.elapsed().as_secs_f64(),
+        step_cost: StepCost::new(&stats, cfg.order),
         stats,
         stop,
         uz_a_end: uz_end,

@@ -32,7 +32,8 @@
 use nalgebra::{Matrix3, SMatrix};
 
 use super::kinematics::{
-    BMatrix, NDOF_EL, NSTRAIN, Point, PointVectors, Strain, Vec3, strain, strain_coeff,
+    NDOF_EL, NSTRAIN, NSYM, NodalVectors, PackedSym, Point, PointVectors, SYM_INDEX, SYM_PAIRS,
+    Strain, Sym8, Vec3, pack, strain, unpack,
 };
 use super::material::{DMatrix, Material};
 use crate::error::{Error, Result};
@@ -41,6 +42,10 @@ use crate::error::{Error, Result};
 pub const NEAS: usize = 5;
 type GMatrix = SMatrix<f64, NSTRAIN, NEAS>;
 pub type ElementMatrix = SMatrix<f64, NDOF_EL, NDOF_EL>;
+
+type GeometricMap = SMatrix<f64, NSYM, NSYM>;
+/// Packed Kg of the Gram change YᵀδY + δYᵀY, per element unknown.
+pub type GramJacobian = SMatrix<f64, NSYM, NDOF_EL>;
 
 /// Sampling points: 0..4 Gauss points, 4..8 ANS edge midpoints A, B, C, D,
 /// 8..12 corners.
@@ -77,20 +82,9 @@ pub struct ShellElement {
     ref_vec: Vec<PointVectors>,
     gps: Vec<GaussPoint>,
     hinv: SMatrix<f64, NEAS, NEAS>,
-}
-
-/// Per-element series of one ANM step: point vectors and the sampling-point
-/// stress weights (Σ w dA s) of every complete order.
-#[derive(Clone, Default)]
-pub struct ElementSeries {
-    xs: Vec<[PointVectors; NPT]>,
-    sig: Vec<[Strain; NPT]>,
-}
-
-impl ElementSeries {
-    pub fn orders(&self) -> usize {
-        self.xs.len()
-    }
+    /// The linear map M ↦ Kg(σ(E(M))) on packed symmetric matrices (see
+    /// [`ShellElement::gram_geometric`]).
+    kmap: Box<GeometricMap>,
 }
 
 fn to_vec(m: &Matrix3<f64>) -> [f64; 6] {
@@ -191,13 +185,57 @@ impl ShellElement {
             element: id,
             problem: "singular EAS matrix H".into(),
         })?;
-        Ok(Self {
+        let mut el = Self {
             nodes,
             pts,
             ref_vec,
             gps,
             hinv,
-        })
+            kmap: Box::new(GeometricMap::zeros()),
+        };
+        el.kmap = el.geometric_map();
+        Ok(el)
+    }
+
+    /// Column k: Kg(σ(E(M))) for M the k-th unit symmetric matrix, through
+    /// the same ANS, EAS and stress path as [`ShellElement::internal`].
+    fn geometric_map(&self) -> Box<GeometricMap> {
+        let mut map = Box::new(GeometricMap::zeros());
+        for (k, &(a, b)) in SYM_PAIRS.iter().enumerate() {
+            let mut m = Sym8::zeros();
+            m[(a, b)] = 1.0;
+            m[(b, a)] = 1.0;
+            let e_pt: [Strain; NPT] = std::array::from_fn(|i| self.pts[i].gram_strain(&m));
+            let (sig, _) = self.stresses(&e_pt);
+            map.set_column(k, &pack(&self.geometric(&sig)));
+        }
+        map
+    }
+
+    /// Geometric stiffness of the sampling-point stress weights.
+    fn geometric(&self, sig: &[Strain; NPT]) -> Sym8 {
+        let mut kg = Sym8::zeros();
+        for (pt, s) in self.pts.iter().zip(sig) {
+            pt.geometric(s, &mut kg);
+        }
+        kg
+    }
+
+    /// Kg(σ) of the stresses σ of the nodal Gram matrix M: strain, EAS and
+    /// stresses are linear in M (kinematics::Point::gram_strain), so this is
+    /// one precomputed 36×36 product. With M the order-p Gram coefficient
+    /// Σ_r Y_rᵀY_(p−r), Kg_p Y_0 + … is the order-p internal force
+    /// (B(x)ᵀσ = Y Kg(σ)).
+    pub fn gram_geometric(&self, m: &Sym8) -> Sym8 {
+        unpack(&(self.kmap.as_ref() * pack(m)))
+    }
+
+    /// Kg(σ) of the stresses at the state (x, d), computed pointwise from
+    /// the full strains (no cancellation of the reference Gram matrix).
+    pub fn state_geometric(&self, x: &[Vec3; 4], d: &[Vec3; 4]) -> Sym8 {
+        let xv = self.vectors(x, d);
+        let e_pt: [Strain; NPT] = std::array::from_fn(|i| strain(&xv[i], &self.ref_vec[i]));
+        self.geometric(&self.stresses(&e_pt).0)
     }
 
     fn combine(&self, gp: &GaussPoint, e_pt: &[Strain; NPT]) -> Strain {
@@ -236,14 +274,10 @@ impl ShellElement {
         std::array::from_fn(|i| self.pts[i].vectors(x, d))
     }
 
-    /// Condensed internal force f = ∫ Bᵀ s dA and, if asked, the condensed
-    /// tangent, at current nodal positions `x` and directors `d`.
-    pub fn internal(
-        &self,
-        x: &[Vec3; 4],
-        d: &[Vec3; 4],
-        want_k: bool,
-    ) -> ([f64; NDOF_EL], Option<ElementMatrix>) {
+    /// Condensed internal force f = ∫ Bᵀ s dA at current nodal positions
+    /// `x` and directors `d`. The tangent is the order-1 operator of the
+    /// element series ([`super::series::ElementSeries::tangent`]).
+    pub fn internal(&self, x: &[Vec3; 4], d: &[Vec3; 4]) -> [f64; NDOF_EL] {
         let xv = self.vectors(x, d);
         let e_pt: [Strain; NPT] = std::array::from_fn(|i| strain(&xv[i], &self.ref_vec[i]));
         let (sig, _) = self.stresses(&e_pt);
@@ -251,87 +285,30 @@ impl ShellElement {
         for i in 0..NPT {
             self.pts[i].bt_sigma(&xv[i], &sig[i], &mut f);
         }
-        if !want_k {
-            return (f, None);
-        }
-        let b_pt: Vec<BMatrix> = (0..NPT).map(|i| self.pts[i].bmatrix(&xv[i])).collect();
-        let mut k = ElementMatrix::zeros();
-        let mut l = SMatrix::<f64, NDOF_EL, NEAS>::zeros();
-        for gp in &self.gps {
-            let mut b = BMatrix::zeros();
-            for c in 0..NSTRAIN {
-                for &(i, w) in &gp.comb[c] {
-                    for j in 0..NDOF_EL {
-                        b[(c, j)] += w * b_pt[i][(c, j)];
-                    }
-                }
-            }
-            let db = gp.d * b;
-            k += b.transpose() * db * gp.da;
-            l += db.transpose() * gp.g * gp.da;
-        }
-        k -= l * self.hinv * l.transpose();
-        let mut kg = [[0.0; 8]; 8];
-        for i in 0..NPT {
-            self.pts[i].geometric(&sig[i], &mut kg);
-        }
-        for a in 0..8 {
-            for b in 0..8 {
-                let v = kg[a][b];
-                if v != 0.0 {
-                    let (ia, ib) = ((a / 2) * 6 + (a % 2) * 3, (b / 2) * 6 + (b % 2) * 3);
-                    for dim in 0..3 {
-                        k[(ia + dim, ib + dim)] += v;
-                    }
-                }
-            }
-        }
-        (f, Some(k))
-    }
-
-    /// Starts the series of a step at the state (x0, d0): order 0.
-    pub fn series_start(&self, x0: &[Vec3; 4], d0: &[Vec3; 4]) -> ElementSeries {
-        let xv = self.vectors(x0, d0);
-        let e_pt: [Strain; NPT] = std::array::from_fn(|i| strain(&xv[i], &self.ref_vec[i]));
-        let (sig, _) = self.stresses(&e_pt);
-        ElementSeries {
-            xs: vec![xv],
-            sig: vec![sig],
-        }
-    }
-
-    /// Completes order m = st.orders() from the order-m nodal increments.
-    pub fn series_complete(&self, st: &mut ElementSeries, xm: &[Vec3; 4], dm: &[Vec3; 4]) {
-        let m = st.xs.len();
-        st.xs.push(self.vectors(xm, dm));
-        let e_pt: [Strain; NPT] = std::array::from_fn(|i| {
-            let col: Vec<PointVectors> = st.xs.iter().map(|v| v[i]).collect();
-            strain_coeff(&col, m, 0)
-        });
-        let (sig, _) = self.stresses(&e_pt);
-        st.sig.push(sig);
-    }
-
-    /// Coefficient p = st.orders() of the condensed internal force with the
-    /// order-p unknowns set to zero:
-    /// f*_p = Σ_pt [B(x_0)ᵀ σ*_p + Σ_{r=1}^{p−1} B(x_r)ᵀ σ_{p−r}],
-    /// σ*_p the stresses of the convolution strain Σ_{r=1}^{p−1} Q(x_r, x_{p−r}).
-    pub fn series_rhs(&self, st: &ElementSeries) -> [f64; NDOF_EL] {
-        let p = st.xs.len();
-        let mut xs_pad = Vec::with_capacity(p + 1);
-        let e_pt: [Strain; NPT] = std::array::from_fn(|i| {
-            xs_pad.clear();
-            xs_pad.extend(st.xs.iter().map(|v| v[i]));
-            xs_pad.push([Vec3::zeros(); 5]);
-            strain_coeff(&xs_pad, p, 1)
-        });
-        let (sig_star, _) = self.stresses(&e_pt);
-        let mut f = [0.0; NDOF_EL];
-        for i in 0..NPT {
-            let pairs = std::iter::once((&st.xs[0][i], &sig_star[i]))
-                .chain((1..p).map(|r| (&st.xs[r][i], &st.sig[p - r][i])));
-            self.pts[i].bt_sigma_conv(pairs, &mut f);
-        }
         f
+    }
+
+    /// The linear map from the element unknowns δY to the packed
+    /// K(YᵀδY + δYᵀY): the change of Kg(σ) along δY at the nodal vectors Y.
+    /// The column of the unknown (dim, b) has YᵀδY + δYᵀY nonzero in row
+    /// and column b only, so it sums 8 of the 36 columns of K.
+    pub fn gram_jacobian(&self, y: &NodalVectors) -> GramJacobian {
+        let mut t = GramJacobian::zeros();
+        for b in 0..8 {
+            for dim in 0..3 {
+                let mut col = PackedSym::zeros();
+                for a in 0..8 {
+                    // (YᵀδY + δYᵀY)_ab = Y[dim, a], doubled on the diagonal.
+                    let w = if a == b {
+                        2.0 * y[(dim, a)]
+                    } else {
+                        y[(dim, a)]
+                    };
+                    col.axpy(w, &self.kmap.column(SYM_INDEX[a][b]), 1.0);
+                }
+                t.set_column(3 * b + dim, &col);
+            }
+        }
+        t
     }
 }

@@ -24,7 +24,7 @@
 // Node/dof/component loops read better with explicit indices.
 #![allow(clippy::needless_range_loop)]
 
-use nalgebra::{SMatrix, Vector3};
+use nalgebra::{SMatrix, SVector, Vector3};
 
 /// Number of strain components: (E⁰, E¹) × (11, 22, 12, 13, 23, 33), tensor
 /// (not engineering) components in the natural covariant basis.
@@ -37,6 +37,64 @@ pub type Vec3 = Vector3<f64>;
 pub type PointVectors = [Vec3; 5];
 pub type Strain = [f64; NSTRAIN];
 pub type BMatrix = SMatrix<f64, NSTRAIN, NDOF_EL>;
+/// The element's nodal vectors as the columns of one matrix Y: column
+/// 2I + s is node I's mid-surface position (s = 0) or director (s = 1).
+/// Stored column-major, Y is the element unknown vector (v, w per node).
+pub type NodalVectors = SMatrix<f64, 3, 8>;
+/// A symmetric matrix over the columns of Y: a nodal Gram matrix YᵀY or a
+/// geometric stiffness (the 24×24 block is this ⊗ I3).
+pub type Sym8 = SMatrix<f64, 8, 8>;
+
+/// Entries of a symmetric 8×8 matrix: its upper triangle, row by row.
+pub const NSYM: usize = 36;
+pub type PackedSym = SVector<f64, NSYM>;
+pub const SYM_PAIRS: [(usize, usize); NSYM] = {
+    let mut pairs = [(0, 0); NSYM];
+    let (mut a, mut k) = (0, 0);
+    while a < 8 {
+        let mut b = a;
+        while b < 8 {
+            pairs[k] = (a, b);
+            k += 1;
+            b += 1;
+        }
+        a += 1;
+    }
+    pairs
+};
+/// SYM_INDEX[a][b]: position of the pair (a, b) or (b, a) in SYM_PAIRS.
+pub const SYM_INDEX: [[usize; 8]; 8] = {
+    let mut index = [[0; 8]; 8];
+    let mut k = 0;
+    while k < NSYM {
+        let (a, b) = SYM_PAIRS[k];
+        index[a][b] = k;
+        index[b][a] = k;
+        k += 1;
+    }
+    index
+};
+
+pub fn pack(m: &Sym8) -> PackedSym {
+    PackedSym::from_fn(|k, _| m[SYM_PAIRS[k]])
+}
+
+pub fn unpack(v: &PackedSym) -> Sym8 {
+    let mut m = Sym8::zeros();
+    for (k, &(a, b)) in SYM_PAIRS.iter().enumerate() {
+        m[(a, b)] = v[k];
+        m[(b, a)] = v[k];
+    }
+    m
+}
+
+/// Y from the nodal positions (or their coefficients) and directors.
+pub fn nodal_vectors(x: &[Vec3; 4], d: &[Vec3; 4]) -> NodalVectors {
+    NodalVectors::from_fn(|dim, col| {
+        let field = if col % 2 == 0 { x } else { d };
+        field[col / 2][dim]
+    })
+}
 
 /// Which nodal field each point vector interpolates: 0 = mid-surface
 /// position (v slot), 1 = director (w slot).
@@ -147,51 +205,31 @@ impl Point {
         }
     }
 
-    /// Σ_r B(x_r)ᵀ σ_r over a series of point vectors and stresses, by
-    /// first accumulating Σ_r σ_r[c] x_r (O(p) 3-vector work per strain
-    /// component) and scattering once: the convolution of an order-p
-    /// right-hand side.
-    pub fn bt_sigma_conv<'a>(
-        &self,
-        pairs: impl Iterator<Item = (&'a PointVectors, &'a Strain)>,
-        out: &mut [f64; NDOF_EL],
-    ) {
-        let mut acc = [[Vec3::zeros(); 5]; NSTRAIN];
-        let mut any = [false; NSTRAIN];
-        for (x, s) in pairs {
-            for (c, terms) in TERMS.iter().enumerate() {
-                let sc = s[c];
-                if sc == 0.0 || terms.is_empty() {
-                    continue;
-                }
-                any[c] = true;
-                for &(k, l, _) in terms.iter() {
-                    acc[c][l] += sc * x[l];
-                    if k != l {
-                        acc[c][k] += sc * x[k];
-                    }
-                }
-            }
-        }
+    /// Strain of a nodal Gram matrix M (linear in M): E_c = Σ coef φ̂_kᵀ M φ̂_l,
+    /// φ̂_k the weights of point vector k over the columns of Y, so that
+    /// M = YᵀY − Y_refᵀY_ref gives [`strain`] and the series coefficient
+    /// M_p = Σ_r Y_rᵀY_(p−r) gives the order-p strain.
+    pub fn gram_strain(&self, m: &Sym8) -> Strain {
+        let mut e = [0.0; NSTRAIN];
         for (c, terms) in TERMS.iter().enumerate() {
-            if !any[c] {
-                continue;
-            }
             for &(k, l, coef) in terms.iter() {
+                let mut s = 0.0;
                 for i in 0..4 {
-                    let (fk, fl) = (coef * self.phi[k][i], coef * self.phi[l][i]);
-                    for dim in 0..3 {
-                        out[6 * i + 3 * SLOT[k] + dim] += fk * acc[c][l][dim];
-                        out[6 * i + 3 * SLOT[l] + dim] += fl * acc[c][k][dim];
+                    for j in 0..4 {
+                        s +=
+                            self.phi[k][i] * self.phi[l][j] * m[(2 * i + SLOT[k], 2 * j + SLOT[l])];
                     }
                 }
+                e[c] += coef * s;
             }
         }
+        e
     }
 
-    /// Geometric stiffness sum_c sigma_c d²E_c/dq² as an 8×8 matrix over
-    /// (node, slot) pairs; the full 24×24 block is this ⊗ I3.
-    pub fn geometric(&self, sigma: &Strain, kg: &mut [[f64; 8]; 8]) {
+    /// Adds the geometric stiffness sum_c sigma_c d²E_c/dq² as an 8×8 matrix
+    /// over (node, slot) pairs; the full 24×24 block is this ⊗ I3. Since E
+    /// is quadratic, B(x)ᵀσ = Y Kg(σ) for the nodal vectors Y of x.
+    pub fn geometric(&self, sigma: &Strain, kg: &mut Sym8) {
         for (c, terms) in TERMS.iter().enumerate() {
             let s = sigma[c];
             if s == 0.0 {
@@ -201,8 +239,8 @@ impl Point {
                 for i in 0..4 {
                     for j in 0..4 {
                         let v = coef * s * self.phi[k][i] * self.phi[l][j];
-                        kg[2 * i + SLOT[k]][2 * j + SLOT[l]] += v;
-                        kg[2 * j + SLOT[l]][2 * i + SLOT[k]] += v;
+                        kg[(2 * i + SLOT[k], 2 * j + SLOT[l])] += v;
+                        kg[(2 * j + SLOT[l], 2 * i + SLOT[k])] += v;
                     }
                 }
             }
@@ -216,24 +254,6 @@ pub fn strain(x: &PointVectors, x0: &PointVectors) -> Strain {
     for (c, terms) in TERMS.iter().enumerate() {
         for &(k, l, coef) in terms.iter() {
             e[c] += coef * (x[k].dot(&x[l]) - x0[k].dot(&x0[l]));
-        }
-    }
-    e
-}
-
-/// Coefficient of order p of the strain from the series of the point vectors
-/// `xs[r]`, r = 0..: sum over r from `lo` to p − lo of coef (x_k,r · x_l,p−r).
-/// With lo = 1 this is the order-p strain with the order-p unknowns set to
-/// zero (the quadratic convolution); with lo = 0 the complete coefficient.
-pub fn strain_coeff(xs: &[PointVectors], p: usize, lo: usize) -> Strain {
-    let mut e = [0.0; NSTRAIN];
-    for (c, terms) in TERMS.iter().enumerate() {
-        for &(k, l, coef) in terms.iter() {
-            let mut s = 0.0;
-            for r in lo..=(p - lo) {
-                s += xs[r][k].dot(&xs[p - r][l]);
-            }
-            e[c] += coef * s;
         }
     }
     e
@@ -258,7 +278,7 @@ mod tests {
         let zero = pt.vectors_of(&[0.0; NDOF_EL]);
         let b = pt.bmatrix(&pt.vectors_of(&q0));
         let sigma: Strain = std::array::from_fn(|c| 0.1 * c as f64 - 0.4);
-        let mut kg = [[0.0; 8]; 8];
+        let mut kg = Sym8::zeros();
         pt.geometric(&sigma, &mut kg);
         let h = 1e-6;
         for j in 0..NDOF_EL {
@@ -284,12 +304,41 @@ mod tests {
             for i in 0..NDOF_EL {
                 let fd = (fp[i] - fm[i]) / (2.0 * h);
                 let an = if i % 3 == j % 3 {
-                    kg[2 * (i / 6) + (i % 6) / 3][2 * (j / 6) + (j % 6) / 3]
+                    kg[(2 * (i / 6) + (i % 6) / 3, 2 * (j / 6) + (j % 6) / 3)]
                 } else {
                     0.0
                 };
                 assert!((fd - an).abs() < 1e-8, "Kg[{i},{j}]: {an} vs {fd}");
             }
+        }
+    }
+
+    #[test]
+    fn gram_forms_match_the_pointwise_strain_and_force() {
+        let pt = Point::new(-0.4, 0.7);
+        let (q0, q) = (state(1.0), state(2.0));
+        let (y0, y) = (
+            NodalVectors::from_column_slice(&q0),
+            NodalVectors::from_column_slice(&q),
+        );
+        let e = strain(&pt.vectors_of(&q), &pt.vectors_of(&q0));
+        let eg = pt.gram_strain(&(y.tr_mul(&y) - y0.tr_mul(&y0)));
+        for c in 0..NSTRAIN {
+            assert!(
+                (e[c] - eg[c]).abs() < 1e-14,
+                "E[{c}]: {} vs {}",
+                e[c],
+                eg[c]
+            );
+        }
+        let sigma: Strain = std::array::from_fn(|c| 0.3 * c as f64 - 1.1);
+        let mut f = [0.0; NDOF_EL];
+        pt.bt_sigma(&pt.vectors_of(&q), &sigma, &mut f);
+        let mut kg = Sym8::zeros();
+        pt.geometric(&sigma, &mut kg);
+        let fg = y * kg;
+        for i in 0..NDOF_EL {
+            assert!((f[i] - fg.as_slice()[i]).abs() < 1e-13, "f[{i}]");
         }
     }
 }

@@ -1,12 +1,13 @@
 //! 3D shell with a director-difference vector, EAS and ANS (DESIGN §3): the
 //! kinematics (strain exactly quadratic in the unknowns), the 3D St
-//! Venant–Kirchhoff law, the 4-node element, and the assembled model that the
-//! ANM engine continues.
+//! Venant–Kirchhoff law, the 4-node element, its internal force along an ANM
+//! series, and the assembled model that the ANM engine continues.
 
 pub mod element;
 pub mod kinematics;
 pub mod material;
 pub mod model;
+pub mod series;
 
 pub use element::ShellElement;
 pub use material::Material;

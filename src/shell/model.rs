@@ -14,16 +14,17 @@
 //! polynomial, its series term is −Σ_{r=1}^{p−1} λ_r m × w_{p−r}.
 //!
 //! Series (order p ≥ 2, U_p = λ_p = 0): element convolutions
-//! (see [`super::element`]), the follower term above, and per contact pair
+//! in nodal Gram form (see [`super::series`]), the follower term above, and per contact pair
 //! the Taylor propagation of h, n (obstacle::GapSeries) and R (eq. 3,
 //! NormalLaw::force_coeff), force coefficient Σ_{r=0}^{p} R_r n_{p−r}.
 
 // Node/dof/component loops read better with explicit indices.
 #![allow(clippy::needless_range_loop)]
 
-use super::element::{ElementSeries, ShellElement};
+use super::element::ShellElement;
 use super::kinematics::Vec3;
 use super::material::Material;
+use super::series::ElementSeries;
 use crate::contact::obstacle::{GapSeries, Obstacle};
 use crate::contact::search::{self, ContactPair};
 use crate::error::{Error, Result};
@@ -234,7 +235,7 @@ impl ShellModel {
         let mut r = vec![0.0; full.len()];
         for e in &self.elements {
             let (x, d) = self.element_state(e, full, false);
-            let (f, _) = e.internal(&x, &d, false);
+            let f = e.internal(&x, &d);
             for (i, &n) in e.nodes.iter().enumerate() {
                 for k in 0..6 {
                     r[6 * n + k] += f[6 * i + k];
@@ -314,6 +315,8 @@ impl ShellModel {
         &self.active
     }
 
+    /// Order 0 of the step's series at u0: element series (which also give
+    /// the element tangents) and contact pair series.
     fn start_series(&mut self, u0: &[f64]) -> Result<()> {
         let full = self.expand(u0);
         self.series_u0 = u0.to_vec();
@@ -322,7 +325,7 @@ impl ShellModel {
             .iter()
             .map(|e| {
                 let (x, d) = self.element_state(e, &full, false);
-                e.series_start(&x, &d)
+                ElementSeries::start(e, &x, &d)
             })
             .collect();
         let mut ps = Vec::with_capacity(self.active.len());
@@ -347,7 +350,7 @@ impl ShellModel {
         for (e, st) in self.elements.iter().zip(self.el_series.iter_mut()) {
             let x = std::array::from_fn(|i| Self::vec3(&full, e.nodes[i], 0));
             let d = std::array::from_fn(|i| Self::vec3(&full, e.nodes[i], 3));
-            e.series_complete(st, &x, &d);
+            st.complete(e, &x, &d);
         }
         for ps in &mut self.pair_series {
             let pair = &self.pairs[ps.pair];
@@ -375,16 +378,17 @@ impl ContinuationProblem for ShellModel {
     fn tangent(&mut self, u: &[f64], lambda: f64) -> Result<(SparseMatrix, Vec<f64>)> {
         let full = self.expand(u);
         self.update_active(&full);
+        self.start_series(u)?;
         let mut k = SparseMatrix::new(self.ndof);
+        k.entries
+            .reserve(576 * self.elements.len() + 9 * (self.follower.len() + self.active.len()));
         let mut add = |free: &[Option<usize>], gi: usize, gj: usize, v: f64| {
             if let (Some(i), Some(j)) = (free[gi], free[gj]) {
                 k.add(i, j, v);
             }
         };
-        for e in &self.elements {
-            let (x, d) = self.element_state(e, &full, false);
-            let (_, ke) = e.internal(&x, &d, true);
-            let ke = ke.expect("tangent requested");
+        for (e, st) in self.elements.iter().zip(&self.el_series) {
+            let ke = st.tangent();
             for a in 0..24 {
                 let ga = 6 * e.nodes[a / 6] + a % 6;
                 for b in 0..24 {
@@ -430,12 +434,24 @@ impl ContinuationProblem for ShellModel {
                 }
             }
         }
-        Self::check_finite(
-            &k.entries.iter().map(|t| t.val).collect::<Vec<_>>(),
-            lambda,
-            "tangent matrix",
-        )?;
-        self.start_series(u)?;
+        if let Some(t) = k.entries.iter().find(|t| !t.val.is_finite()) {
+            let i = self
+                .free
+                .iter()
+                .position(|f| *f == Some(t.row))
+                .unwrap_or(0);
+            return Err(Error::NonFinite {
+                step: 0,
+                param: "lambda",
+                at: lambda,
+                what: format!(
+                    "tangent matrix (entry {}: node {}, dof {})",
+                    t.row,
+                    i / 6,
+                    i % 6
+                ),
+            });
+        }
         Ok((k, self.reduce(&rl)))
     }
 
@@ -449,8 +465,8 @@ impl ContinuationProblem for ShellModel {
         }
         self.complete_order(&u[p - 1]);
         let mut rhs = vec![0.0; self.free.len()];
-        for (e, st) in self.elements.iter().zip(&self.el_series) {
-            let f = e.series_rhs(st);
+        for (e, st) in self.elements.iter().zip(&mut self.el_series) {
+            let f = st.rhs(e);
             for (i, &n) in e.nodes.iter().enumerate() {
                 for k in 0..6 {
                     rhs[6 * n + k] += f[6 * i + k];
