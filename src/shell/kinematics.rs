@@ -20,6 +20,11 @@
 //! strain is exactly quadratic in (v, w): its first derivative B is linear and
 //! its second derivative constant. This is what makes the ANM right-hand side
 //! a plain convolution (Zahrouni, Cochelin, Potier-Ferry, CMAME 175 (1999)).
+//!
+//! Nodal Gram form (the element series and tangent, super::series): with
+//! the element's nodal vectors as the columns of Y ([`NodalVectors`]), each
+//! point vector is x_k = Y w_k, so E_c = Σ coef w_kᵀ (YᵀY − ref) w_l is
+//! linear in the 7×7 Gram matrix YᵀY ([`Point::gram_strain`]).
 
 // Node/dof/component loops read better with explicit indices.
 #![allow(clippy::needless_range_loop)]
