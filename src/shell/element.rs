@@ -32,8 +32,8 @@
 use nalgebra::{Matrix3, SMatrix};
 
 use super::kinematics::{
-    NDOF_EL, NSTRAIN, NSYM, NodalVectors, PackedSym, Point, PointVectors, SYM_INDEX, SYM_PAIRS,
-    Strain, Sym8, Vec3, pack, strain, unpack,
+    NCOL, NDOF_EL, NDOF_Y, NSTRAIN, NSYM, NodalVectors, PackedSym, Point, PointVectors, SYM_INDEX,
+    SYM_PAIRS, Strain, Sym, Vec3, pack, strain, unpack,
 };
 use super::material::{DMatrix, Material};
 use crate::error::{Error, Result};
@@ -44,8 +44,8 @@ type GMatrix = SMatrix<f64, NSTRAIN, NEAS>;
 pub type ElementMatrix = SMatrix<f64, NDOF_EL, NDOF_EL>;
 
 type GeometricMap = SMatrix<f64, NSYM, NSYM>;
-/// Packed Kg of the Gram change YᵀδY + δYᵀY, per element unknown.
-pub type GramJacobian = SMatrix<f64, NSYM, NDOF_EL>;
+/// Packed Kg of the Gram change YᵀδY + δYᵀY, per unknown of Y.
+pub type GramJacobian = SMatrix<f64, NSYM, NDOF_Y>;
 
 /// Sampling points: 0..4 Gauss points, 4..8 ANS edge midpoints A, B, C, D,
 /// 8..12 corners.
@@ -202,7 +202,7 @@ impl ShellElement {
     fn geometric_map(&self) -> Box<GeometricMap> {
         let mut map = Box::new(GeometricMap::zeros());
         for (k, &(a, b)) in SYM_PAIRS.iter().enumerate() {
-            let mut m = Sym8::zeros();
+            let mut m = Sym::zeros();
             m[(a, b)] = 1.0;
             m[(b, a)] = 1.0;
             let e_pt: [Strain; NPT] = std::array::from_fn(|i| self.pts[i].gram_strain(&m));
@@ -213,8 +213,8 @@ impl ShellElement {
     }
 
     /// Geometric stiffness of the sampling-point stress weights.
-    fn geometric(&self, sig: &[Strain; NPT]) -> Sym8 {
-        let mut kg = Sym8::zeros();
+    fn geometric(&self, sig: &[Strain; NPT]) -> Sym {
+        let mut kg = Sym::zeros();
         for (pt, s) in self.pts.iter().zip(sig) {
             pt.geometric(s, &mut kg);
         }
@@ -223,16 +223,16 @@ impl ShellElement {
 
     /// Kg(σ) of the stresses σ of the nodal Gram matrix M: strain, EAS and
     /// stresses are linear in M (kinematics::Point::gram_strain), so this is
-    /// one precomputed 36×36 product. With M the order-p Gram coefficient
-    /// Σ_r Y_rᵀY_(p−r), Kg_p Y_0 + … is the order-p internal force
+    /// one precomputed 28×28 product. With M the order-p Gram coefficient
+    /// Σ_r Y_rᵀY_(p−r), Y_0 Kg_p + … is the order-p internal force on Y
     /// (B(x)ᵀσ = Y Kg(σ)).
-    pub fn gram_geometric(&self, m: &Sym8) -> Sym8 {
+    pub fn gram_geometric(&self, m: &Sym) -> Sym {
         unpack(&(self.kmap.as_ref() * pack(m)))
     }
 
     /// Kg(σ) of the stresses at the state (x, d), computed pointwise from
     /// the full strains (no cancellation of the reference Gram matrix).
-    pub fn state_geometric(&self, x: &[Vec3; 4], d: &[Vec3; 4]) -> Sym8 {
+    pub fn state_geometric(&self, x: &[Vec3; 4], d: &[Vec3; 4]) -> Sym {
         let xv = self.vectors(x, d);
         let e_pt: [Strain; NPT] = std::array::from_fn(|i| strain(&xv[i], &self.ref_vec[i]));
         self.geometric(&self.stresses(&e_pt).0)
@@ -288,16 +288,16 @@ impl ShellElement {
         f
     }
 
-    /// The linear map from the element unknowns δY to the packed
+    /// The linear map from the unknowns δY of Y to the packed
     /// K(YᵀδY + δYᵀY): the change of Kg(σ) along δY at the nodal vectors Y.
     /// The column of the unknown (dim, b) has YᵀδY + δYᵀY nonzero in row
-    /// and column b only, so it sums 8 of the 36 columns of K.
+    /// and column b only, so it sums 7 of the 28 columns of K.
     pub fn gram_jacobian(&self, y: &NodalVectors) -> GramJacobian {
         let mut t = GramJacobian::zeros();
-        for b in 0..8 {
+        for b in 0..NCOL {
             for dim in 0..3 {
                 let mut col = PackedSym::zeros();
-                for a in 0..8 {
+                for a in 0..NCOL {
                     // (YᵀδY + δYᵀY)_ab = Y[dim, a], doubled on the diagonal.
                     let w = if a == b {
                         2.0 * y[(dim, a)]

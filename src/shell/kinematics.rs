@@ -20,6 +20,11 @@
 //! strain is exactly quadratic in (v, w): its first derivative B is linear and
 //! its second derivative constant. This is what makes the ANM right-hand side
 //! a plain convolution (Zahrouni, Cochelin, Potier-Ferry, CMAME 175 (1999)).
+//!
+//! Nodal Gram form (the element series and tangent, super::series): with
+//! the element's nodal vectors as the columns of Y ([`NodalVectors`]), each
+//! point vector is x_k = Y w_k, so E_c = Σ coef w_kᵀ (YᵀY − ref) w_l is
+//! linear in the 7×7 Gram matrix YᵀY ([`Point::gram_strain`]).
 
 // Node/dof/component loops read better with explicit indices.
 #![allow(clippy::needless_range_loop)]
@@ -37,23 +42,29 @@ pub type Vec3 = Vector3<f64>;
 pub type PointVectors = [Vec3; 5];
 pub type Strain = [f64; NSTRAIN];
 pub type BMatrix = SMatrix<f64, NSTRAIN, NDOF_EL>;
-/// The element's nodal vectors as the columns of one matrix Y: column
-/// 2I + s is node I's mid-surface position (s = 0) or director (s = 1).
-/// Stored column-major, Y is the element unknown vector (v, w per node).
-pub type NodalVectors = SMatrix<f64, 3, 8>;
+/// Columns of the element's nodal-vector matrix Y: the position differences
+/// x_I − x_0 (I = 1, 2, 3), then the directors d_0..d_3. The strain sees the
+/// positions only through a1 and a2, derivatives whose nodal weights sum to
+/// zero, so the differences carry all of it (7 columns instead of 8: a
+/// translation changes nothing).
+pub const NCOL: usize = 7;
+/// Unknowns of Y (3 per column), column-major.
+pub const NDOF_Y: usize = 3 * NCOL;
+pub type NodalVectors = SMatrix<f64, 3, NCOL>;
 /// A symmetric matrix over the columns of Y: a nodal Gram matrix YᵀY or a
-/// geometric stiffness (the 24×24 block is this ⊗ I3).
-pub type Sym8 = SMatrix<f64, 8, 8>;
+/// geometric stiffness (the Y block is this ⊗ I3).
+pub type Sym = SMatrix<f64, NCOL, NCOL>;
+pub type YMatrix = SMatrix<f64, NDOF_Y, NDOF_Y>;
 
-/// Entries of a symmetric 8×8 matrix: its upper triangle, row by row.
-pub const NSYM: usize = 36;
+/// Entries of a symmetric NCOL × NCOL matrix: its upper triangle, row by row.
+pub const NSYM: usize = NCOL * (NCOL + 1) / 2;
 pub type PackedSym = SVector<f64, NSYM>;
 pub const SYM_PAIRS: [(usize, usize); NSYM] = {
     let mut pairs = [(0, 0); NSYM];
     let (mut a, mut k) = (0, 0);
-    while a < 8 {
+    while a < NCOL {
         let mut b = a;
-        while b < 8 {
+        while b < NCOL {
             pairs[k] = (a, b);
             k += 1;
             b += 1;
@@ -63,8 +74,8 @@ pub const SYM_PAIRS: [(usize, usize); NSYM] = {
     pairs
 };
 /// SYM_INDEX[a][b]: position of the pair (a, b) or (b, a) in SYM_PAIRS.
-pub const SYM_INDEX: [[usize; 8]; 8] = {
-    let mut index = [[0; 8]; 8];
+pub const SYM_INDEX: [[usize; NCOL]; NCOL] = {
+    let mut index = [[0; NCOL]; NCOL];
     let mut k = 0;
     while k < NSYM {
         let (a, b) = SYM_PAIRS[k];
@@ -75,12 +86,12 @@ pub const SYM_INDEX: [[usize; 8]; 8] = {
     index
 };
 
-pub fn pack(m: &Sym8) -> PackedSym {
+pub fn pack(m: &Sym) -> PackedSym {
     PackedSym::from_fn(|k, _| m[SYM_PAIRS[k]])
 }
 
-pub fn unpack(v: &PackedSym) -> Sym8 {
-    let mut m = Sym8::zeros();
+pub fn unpack(v: &PackedSym) -> Sym {
+    let mut m = Sym::zeros();
     for (k, &(a, b)) in SYM_PAIRS.iter().enumerate() {
         m[(a, b)] = v[k];
         m[(b, a)] = v[k];
@@ -91,14 +102,64 @@ pub fn unpack(v: &PackedSym) -> Sym8 {
 /// Y from the nodal positions (or their coefficients) and directors.
 pub fn nodal_vectors(x: &[Vec3; 4], d: &[Vec3; 4]) -> NodalVectors {
     NodalVectors::from_fn(|dim, col| {
-        let field = if col % 2 == 0 { x } else { d };
-        field[col / 2][dim]
+        if col < 3 {
+            x[col + 1][dim] - x[0][dim]
+        } else {
+            d[col - 3][dim]
+        }
+    })
+}
+
+/// Element unknown a (6 per node: v, w) as Y unknowns, δY = S δq:
+/// (first, count, sign), the Y unknowns first + 3 m for m < count. v_0
+/// enters the three differences with −1, v_I (I ≥ 1) its difference, w_I
+/// its director column.
+const Y_DOFS: [(usize, usize, f64); NDOF_EL] = {
+    let mut t = [(0, 0, 0.0); NDOF_EL];
+    let mut a = 0;
+    while a < NDOF_EL {
+        let (node, k) = (a / 6, a % 6);
+        let dim = k % 3;
+        t[a] = if k >= 3 {
+            (3 * (3 + node) + dim, 1, 1.0)
+        } else if node == 0 {
+            (dim, 3, -1.0)
+        } else {
+            (3 * (node - 1) + dim, 1, 1.0)
+        };
+        a += 1;
+    }
+    t
+};
+
+/// Element force from the force on Y: f_q = Sᵀ f_Y.
+pub fn element_force(fy: &NodalVectors) -> [f64; NDOF_EL] {
+    let fy = fy.as_slice();
+    std::array::from_fn(|a| {
+        let (first, count, sign) = Y_DOFS[a];
+        sign * (0..count).map(|m| fy[first + 3 * m]).sum::<f64>()
+    })
+}
+
+/// Element matrix from a matrix on Y: K_q = Sᵀ K_Y S.
+pub fn element_matrix(ky: &YMatrix) -> SMatrix<f64, NDOF_EL, NDOF_EL> {
+    let mut ks = SMatrix::<f64, NDOF_Y, NDOF_EL>::zeros();
+    for (b, &(first, count, sign)) in Y_DOFS.iter().enumerate() {
+        for m in 0..count {
+            ks.column_mut(b).axpy(sign, &ky.column(first + 3 * m), 1.0);
+        }
+    }
+    SMatrix::from_fn(|a, b| {
+        let (first, count, sign) = Y_DOFS[a];
+        sign * (0..count).map(|m| ks[(first + 3 * m, b)]).sum::<f64>()
     })
 }
 
 /// Which nodal field each point vector interpolates: 0 = mid-surface
 /// position (v slot), 1 = director (w slot).
 const SLOT: [usize; 5] = [0, 0, 1, 1, 1];
+/// The columns of Y a slot's vectors draw on (their nonzero weights).
+const COLS: [(usize, usize); 2] = [(0, 3), (3, NCOL)];
 
 /// Strain component c = sum over terms coef (x_k · x_l) − reference.
 const TERMS: [&[(usize, usize, f64)]; NSTRAIN] = [
@@ -136,14 +197,23 @@ pub fn shape(xi: f64, eta: f64) -> ([f64; 4], [f64; 4], [f64; 4]) {
 pub struct Point {
     /// phi[k][I]: weight of node I in vector k.
     pub phi: [[f64; 4]; 5],
+    /// w[k][c]: weight of column c of Y in vector k (the position weights
+    /// of nodes 1..3 on the differences, since those of a1, a2 sum to 0).
+    w: [[f64; NCOL]; 5],
 }
 
 impl Point {
     pub fn new(xi: f64, eta: f64) -> Self {
         let (n, nx, ny) = shape(xi, eta);
-        Self {
-            phi: [nx, ny, n, nx, ny],
-        }
+        let phi = [nx, ny, n, nx, ny];
+        let w = std::array::from_fn(|k| {
+            std::array::from_fn(|c| match (SLOT[k], c) {
+                (0, c) if c < 3 => phi[k][c + 1],
+                (1, c) if c >= 3 => phi[k][c - 3],
+                _ => 0.0,
+            })
+        });
+        Self { phi, w }
     }
 
     /// The point vectors from nodal positions `x` and directors `d` (full
@@ -205,19 +275,18 @@ impl Point {
         }
     }
 
-    /// Strain of a nodal Gram matrix M (linear in M): E_c = Σ coef φ̂_kᵀ M φ̂_l,
-    /// φ̂_k the weights of point vector k over the columns of Y, so that
+    /// Strain of a nodal Gram matrix M (linear in M): E_c = Σ coef w_kᵀ M w_l,
+    /// w_k the weights of point vector k over the columns of Y, so that
     /// M = YᵀY − Y_refᵀY_ref gives [`strain`] and the series coefficient
     /// M_p = Σ_r Y_rᵀY_(p−r) gives the order-p strain.
-    pub fn gram_strain(&self, m: &Sym8) -> Strain {
+    pub fn gram_strain(&self, m: &Sym) -> Strain {
         let mut e = [0.0; NSTRAIN];
         for (c, terms) in TERMS.iter().enumerate() {
             for &(k, l, coef) in terms.iter() {
                 let mut s = 0.0;
-                for i in 0..4 {
-                    for j in 0..4 {
-                        s +=
-                            self.phi[k][i] * self.phi[l][j] * m[(2 * i + SLOT[k], 2 * j + SLOT[l])];
+                for i in COLS[SLOT[k]].0..COLS[SLOT[k]].1 {
+                    for j in COLS[SLOT[l]].0..COLS[SLOT[l]].1 {
+                        s += self.w[k][i] * self.w[l][j] * m[(i, j)];
                     }
                 }
                 e[c] += coef * s;
@@ -226,21 +295,22 @@ impl Point {
         e
     }
 
-    /// Adds the geometric stiffness sum_c sigma_c d²E_c/dq² as an 8×8 matrix
-    /// over (node, slot) pairs; the full 24×24 block is this ⊗ I3. Since E
-    /// is quadratic, B(x)ᵀσ = Y Kg(σ) for the nodal vectors Y of x.
-    pub fn geometric(&self, sigma: &Strain, kg: &mut Sym8) {
+    /// Adds the geometric stiffness Σ_c σ_c d²E_c/dY² over the columns of Y
+    /// (the Y block is this ⊗ I3). Since E is quadratic in Y, the force on
+    /// Y is B(x)ᵀσ = Y Kg(σ), and on the element unknowns
+    /// [`element_force`] of it.
+    pub fn geometric(&self, sigma: &Strain, kg: &mut Sym) {
         for (c, terms) in TERMS.iter().enumerate() {
             let s = sigma[c];
             if s == 0.0 {
                 continue;
             }
             for &(k, l, coef) in terms.iter() {
-                for i in 0..4 {
-                    for j in 0..4 {
-                        let v = coef * s * self.phi[k][i] * self.phi[l][j];
-                        kg[(2 * i + SLOT[k], 2 * j + SLOT[l])] += v;
-                        kg[(2 * j + SLOT[l], 2 * i + SLOT[k])] += v;
+                for i in COLS[SLOT[k]].0..COLS[SLOT[k]].1 {
+                    for j in COLS[SLOT[l]].0..COLS[SLOT[l]].1 {
+                        let v = coef * s * self.w[k][i] * self.w[l][j];
+                        kg[(i, j)] += v;
+                        kg[(j, i)] += v;
                     }
                 }
             }
@@ -278,8 +348,15 @@ mod tests {
         let zero = pt.vectors_of(&[0.0; NDOF_EL]);
         let b = pt.bmatrix(&pt.vectors_of(&q0));
         let sigma: Strain = std::array::from_fn(|c| 0.1 * c as f64 - 0.4);
-        let mut kg = Sym8::zeros();
+        let mut kg = Sym::zeros();
         pt.geometric(&sigma, &mut kg);
+        let kq = element_matrix(&YMatrix::from_fn(|i, j| {
+            if i % 3 == j % 3 {
+                kg[(i / 3, j / 3)]
+            } else {
+                0.0
+            }
+        }));
         let h = 1e-6;
         for j in 0..NDOF_EL {
             let mut qp = q0;
@@ -303,11 +380,7 @@ mod tests {
             pt.bt_sigma(&pt.vectors_of(&qm), &sigma, &mut fm);
             for i in 0..NDOF_EL {
                 let fd = (fp[i] - fm[i]) / (2.0 * h);
-                let an = if i % 3 == j % 3 {
-                    kg[(2 * (i / 6) + (i % 6) / 3, 2 * (j / 6) + (j % 6) / 3)]
-                } else {
-                    0.0
-                };
+                let an = kq[(i, j)];
                 assert!((fd - an).abs() < 1e-8, "Kg[{i},{j}]: {an} vs {fd}");
             }
         }
@@ -317,10 +390,14 @@ mod tests {
     fn gram_forms_match_the_pointwise_strain_and_force() {
         let pt = Point::new(-0.4, 0.7);
         let (q0, q) = (state(1.0), state(2.0));
-        let (y0, y) = (
-            NodalVectors::from_column_slice(&q0),
-            NodalVectors::from_column_slice(&q),
-        );
+        let nodal = |q: &[f64; NDOF_EL]| {
+            let v = |i: usize| Vec3::new(q[i], q[i + 1], q[i + 2]);
+            nodal_vectors(
+                &std::array::from_fn(|n| v(6 * n)),
+                &std::array::from_fn(|n| v(6 * n + 3)),
+            )
+        };
+        let (y0, y) = (nodal(&q0), nodal(&q));
         let e = strain(&pt.vectors_of(&q), &pt.vectors_of(&q0));
         let eg = pt.gram_strain(&(y.tr_mul(&y) - y0.tr_mul(&y0)));
         for c in 0..NSTRAIN {
@@ -334,11 +411,16 @@ mod tests {
         let sigma: Strain = std::array::from_fn(|c| 0.3 * c as f64 - 1.1);
         let mut f = [0.0; NDOF_EL];
         pt.bt_sigma(&pt.vectors_of(&q), &sigma, &mut f);
-        let mut kg = Sym8::zeros();
+        let mut kg = Sym::zeros();
         pt.geometric(&sigma, &mut kg);
-        let fg = y * kg;
+        let fg = element_force(&(y * kg));
         for i in 0..NDOF_EL {
-            assert!((f[i] - fg.as_slice()[i]).abs() < 1e-13, "f[{i}]");
+            assert!(
+                (f[i] - fg[i]).abs() < 1e-13,
+                "f[{i}]: {} vs {}",
+                f[i],
+                fg[i]
+            );
         }
     }
 }

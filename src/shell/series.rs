@@ -1,10 +1,11 @@
 //! The element's internal force along one ANM step, in nodal Gram form.
 //!
-//! With the element's nodal vectors as the columns of Y (positions and
-//! directors, kinematics::NodalVectors), every strain component is linear in
-//! the Gram matrix M = YᵀY − Y_refᵀY_ref (kinematics::Point::gram_strain), the
-//! stresses are linear in the strains, and the internal force is
-//! f = Y Kg(σ). Along the series Y(a) = Σ_r Y_r a^r:
+//! With the element's nodal vectors as the columns of Y (position
+//! differences and directors, kinematics::NodalVectors), every strain
+//! component is linear in the Gram matrix M = YᵀY − Y_refᵀY_ref
+//! (kinematics::Point::gram_strain), the stresses are linear in the strains,
+//! and the internal force on Y is f = Y Kg(σ) (on the element unknowns:
+//! kinematics::element_force). Along the series Y(a) = Σ_r Y_r a^r:
 //!
 //! ```text
 //! M_p  = Σ_{r=0}^{p} Y_rᵀ Y_{p−r},        Kg_p = K(M_p)      (p ≥ 1)
@@ -14,36 +15,35 @@
 //!
 //! with K the element's precomputed linear map M ↦ Kg(σ(E(M)))
 //! ([`ShellElement::gram_geometric`]) and f*_p the right-hand side of order p
-//! (order-p unknowns set to zero). The convolutions run on 3×8 and 8×8
+//! (order-p unknowns set to zero). The convolutions run on 3×7 and 7×7
 //! matrices instead of the 12 sampling points, and the strain-to-stress path
-//! (ANS, EAS, material) costs one 36×36 product per order.
+//! (ANS, EAS, material) costs one 28×28 product per order.
 //!
 //! Order 0 is taken pointwise from the full state ([`ShellElement::
 //! state_geometric`]): M_0 would subtract two nearly equal Gram matrices.
-//! The strain only sees differences of positions (a1, a2 are derivatives),
-//! so Y_0's positions are taken relative to the element centroid: the
-//! products Y_0ᵀY_p and Y_0 Kg stay at the scale of the element, not of its
-//! distance from the origin.
 
 use super::element::{ElementMatrix, GramJacobian, ShellElement};
-use super::kinematics::{NDOF_EL, NodalVectors, Sym8, Vec3, nodal_vectors, unpack};
+use super::kinematics::{
+    NDOF_EL, NDOF_Y, NodalVectors, Sym, Vec3, YMatrix, element_force, element_matrix,
+    nodal_vectors, unpack,
+};
 
 /// Series of one element over an ANM step: nodal vectors and geometric
 /// stiffnesses of every complete order.
 #[derive(Clone)]
 pub struct ElementSeries {
     y: Vec<NodalVectors>,
-    kg: Vec<Sym8>,
+    kg: Vec<Sym>,
     /// T = K(Y_0ᵀδY + δYᵀY_0) per unknown: the order-1 map, which gives
     /// the tangent and completes an order, Kg_p = Kg*_p + T q_p.
     t: Box<GramJacobian>,
     /// Kg*_p = K(M*_p) of the last right-hand side, with its order p.
-    kg_star: Option<(usize, Sym8)>,
+    kg_star: Option<(usize, Sym)>,
 }
 
 /// Σ_{r=lo}^{p−lo} Y_rᵀ Y_{p−r}, symmetric: each pair (r, p−r) once.
-fn gram_convolution(y: &[NodalVectors], p: usize, lo: usize) -> Sym8 {
-    let mut half = Sym8::zeros();
+fn gram_convolution(y: &[NodalVectors], p: usize, lo: usize) -> Sym {
+    let mut half = Sym::zeros();
     let mut r = lo;
     while 2 * r < p {
         half += y[r].tr_mul(&y[p - r]);
@@ -59,8 +59,7 @@ fn gram_convolution(y: &[NodalVectors], p: usize, lo: usize) -> Sym8 {
 impl ElementSeries {
     /// Order 0 at the state (x0, d0).
     pub fn start(e: &ShellElement, x0: &[Vec3; 4], d0: &[Vec3; 4]) -> Self {
-        let centre = x0.iter().sum::<Vec3>() / 4.0;
-        let y0 = nodal_vectors(&x0.map(|x| x - centre), d0);
+        let y0 = nodal_vectors(x0, d0);
         Self {
             t: Box::new(e.gram_jacobian(&y0)),
             y: vec![y0],
@@ -73,24 +72,22 @@ impl ElementSeries {
         self.y.len()
     }
 
-    /// The condensed tangent at the step start, f_1 = K_t q_1:
+    /// The condensed tangent at the step start, f_1 = K_t q_1: on Y,
     /// δf = δY Kg_0 + Y_0 K(Y_0ᵀδY + δYᵀY_0), the geometric part Kg_0 ⊗ I3
-    /// and the material part Y_0 T.
+    /// and the material part Y_0 T; then mapped to the element unknowns.
     pub fn tangent(&self) -> ElementMatrix {
         let (y0, kg0) = (&self.y[0], &self.kg[0]);
-        let mut k = ElementMatrix::zeros();
+        let mut k = YMatrix::zeros();
         for (j, t) in self.t.column_iter().enumerate() {
             let df = y0 * unpack(&t.into_owned());
             k.column_mut(j).copy_from_slice(df.as_slice());
         }
-        for a in 0..8 {
-            for b in 0..8 {
-                for dim in 0..3 {
-                    k[(3 * a + dim, 3 * b + dim)] += kg0[(a, b)];
-                }
+        for j in 0..NDOF_Y {
+            for i in (j % 3..NDOF_Y).step_by(3) {
+                k[(i, j)] += kg0[(i / 3, j / 3)];
             }
         }
-        k
+        element_matrix(&k)
     }
 
     /// Completes order m = orders() from the order-m nodal increments:
@@ -100,11 +97,11 @@ impl ElementSeries {
         let m = self.y.len();
         let kg_star = match self.kg_star.take() {
             Some((p, kg)) if p == m => kg,
-            _ if m == 1 => Sym8::zeros(),
+            _ if m == 1 => Sym::zeros(),
             _ => e.gram_geometric(&gram_convolution(&self.y, m, 1)),
         };
         let ym = nodal_vectors(xm, dm);
-        let q = nalgebra::SVector::<f64, NDOF_EL>::from_column_slice(ym.as_slice());
+        let q = nalgebra::SVector::<f64, NDOF_Y>::from_column_slice(ym.as_slice());
         self.kg.push(kg_star + unpack(&(self.t.as_ref() * q)));
         self.y.push(ym);
     }
@@ -120,9 +117,7 @@ impl ElementSeries {
             f += yr * kg;
         }
         self.kg_star = Some((p, kg_star));
-        let mut out = [0.0; NDOF_EL];
-        out.copy_from_slice(f.as_slice());
-        out
+        element_force(&f)
     }
 }
 
@@ -132,8 +127,7 @@ mod tests {
     use crate::shell::Material;
     use nalgebra::{SMatrix, SVector};
 
-    /// A curved, distorted element far from the origin (the centroid shift
-    /// matters there).
+    /// A curved, distorted element far from the origin.
     fn element() -> (ShellElement, [Vec3; 4], [Vec3; 4]) {
         let far = Vec3::new(40.0, -25.0, 10.0);
         let x = [
@@ -208,8 +202,14 @@ mod tests {
             if p > 2 {
                 return SVector::zeros();
             }
-            let y = nodal_vectors(&ys[p - 1].0, &ys[p - 1].1);
-            SVector::from_column_slice(y.as_slice())
+            let (x, d) = &ys[p - 1];
+            SVector::from_fn(|a, _| {
+                if a % 6 < 3 {
+                    x[a / 6][a % 3]
+                } else {
+                    d[a / 6][a % 3]
+                }
+            })
         };
         st.complete(&e, &ys[0].0, &ys[0].1);
         let scale = coeff(1).norm();
