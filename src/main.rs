@@ -64,6 +64,18 @@ enum Command {
         #[arg(short, long, value_name = "DIR")]
         out: PathBuf,
     },
+    /// Time one method and setting on a friction scene: `repeat` solves after
+    /// a warm-up, wall min / median / max. Under callgrind (see
+    /// `anm::study::timing::instructions`) it gives the instruction count.
+    Time {
+        scene: PathBuf,
+        /// anm:ORDER:EPS (e.g. anm:15:1e-9) or ida:RTOL (e.g. ida:1e-10).
+        #[arg(long)]
+        method: anm::study::bench::Method,
+        /// Timed repetitions after a warm-up run; 0: a single run (for callgrind).
+        #[arg(long, default_value_t = 20)]
+        repeat: usize,
+    },
     /// Solve a scene with an external reference solver.
     #[cfg(feature = "reference")]
     Reference {
@@ -241,6 +253,34 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
             }
             bench::write(&rows, &reference_name, &out)?;
             println!("outputs in {}", out.display());
+            Ok(ExitCode::SUCCESS)
+        }
+        Command::Time {
+            scene,
+            method,
+            repeat,
+        } => {
+            let (kind, friction) = load(&scene)?;
+            let Some(sc) = friction else {
+                anyhow::bail!("`anm time` runs friction scenes, not `{}`", kind.name());
+            };
+            // --repeat 0 (under callgrind): exactly one solve, no warm-up.
+            let timed =
+                anm::study::timing::interleaved(&sc, std::slice::from_ref(&method), repeat)?
+                    .remove(0);
+            let (spread, sol) = (timed.spread, timed.solution);
+            println!(
+                "{} {}: stop = {}, {} steps, {} factorizations; wall over {} runs: min {:.3e} s, median {:.3e} s, max {:.3e} s",
+                scene.display(),
+                method.spec(),
+                sol.stop,
+                sol.stats.steps,
+                sol.stats.factorizations,
+                spread.samples.len(),
+                spread.min(),
+                spread.median(),
+                spread.quantile(1.0)
+            );
             Ok(ExitCode::SUCCESS)
         }
         Command::Stress {

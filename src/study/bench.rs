@@ -36,6 +36,32 @@ impl Method {
             Method::Ida { rtol } => format!("rtol={rtol:.0e}"),
         }
     }
+    /// The command-line form read by [`Method::from_str`]: "anm:15:1e-9" or
+    /// "ida:1e-10".
+    pub fn spec(&self) -> String {
+        match self {
+            Method::Anm { order, eps } => format!("anm:{order}:{eps:e}"),
+            Method::Ida { rtol } => format!("ida:{rtol:e}"),
+        }
+    }
+}
+
+impl std::str::FromStr for Method {
+    type Err = String;
+    fn from_str(s: &str) -> std::result::Result<Self, String> {
+        let parts: Vec<&str> = s.split(':').collect();
+        let num = |x: &str| x.parse::<f64>().map_err(|e| format!("`{x}`: {e}"));
+        match parts.as_slice() {
+            ["anm", order, eps] => Ok(Method::Anm {
+                order: order.parse().map_err(|e| format!("`{order}`: {e}"))?,
+                eps: num(eps)?,
+            }),
+            ["ida", rtol] => Ok(Method::Ida { rtol: num(rtol)? }),
+            _ => Err(format!(
+                "`{s}`: expected anm:ORDER:EPS (e.g. anm:15:1e-9) or ida:RTOL (e.g. ida:1e-10)"
+            )),
+        }
+    }
 }
 
 /// A solved case: the history rows on the output grid and the counters.
