@@ -3,7 +3,11 @@
 //! Sparse matrices are assembled as triplets (duplicates summed) and factored
 //! by faer's sparse LU. The symbolic analysis depends only on the pattern,
 //! which is fixed for a mesh, so [`SparseLu`] keeps it and reuses it for every
-//! later numeric factorization.
+//! later numeric factorization. Systems of a few unknowns use the dense
+//! [`DenseLu`].
+
+mod dense_lu;
+pub use dense_lu::DenseLu;
 
 use faer::linalg::solvers::Solve;
 use faer::sparse::linalg::solvers::{Lu, SymbolicLu};
