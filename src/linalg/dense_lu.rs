@@ -68,32 +68,45 @@ impl DenseLu {
 
     /// b <- A^-1 b; false (b partly overwritten) when a pivot is zero.
     pub fn solve_in_place(&self, b: &mut [f64]) -> bool {
-        let n = self.n;
         for &(i, piv) in &self.swaps {
             b.swap(i, piv);
         }
-        // Column-oriented substitutions over slices (no index checks inside).
-        for (i, col) in self.lu.chunks_exact(n).enumerate() {
-            let (head, tail) = b.split_at_mut(i + 1);
-            let coeff = head[i];
-            for (br, &l) in tail.iter_mut().zip(&col[i + 1..]) {
-                *br += -coeff * l;
-            }
+        // A constant size lets the compiler unroll the substitutions of the
+        // tiny systems (a general loop costs ~400 instructions at n = 4).
+        match self.n {
+            1 => substitute(1, &self.lu, b),
+            2 => substitute(2, &self.lu, b),
+            3 => substitute(3, &self.lu, b),
+            4 => substitute(4, &self.lu, b),
+            5 => substitute(5, &self.lu, b),
+            6 => substitute(6, &self.lu, b),
+            n => substitute(n, &self.lu, b),
         }
-        for (i, col) in self.lu.chunks_exact(n).enumerate().rev() {
-            let diag = col[i];
-            if diag == 0.0 {
-                return false;
-            }
-            let (head, tail) = b.split_at_mut(i);
-            let coeff = tail[0] / diag;
-            tail[0] = coeff;
-            for (br, &u) in head.iter_mut().zip(&col[..i]) {
-                *br += -coeff * u;
-            }
-        }
-        true
     }
+}
+
+/// Forward (unit L) then backward (U) substitution, column by column.
+#[inline(always)]
+fn substitute(n: usize, lu: &[f64], b: &mut [f64]) -> bool {
+    let (m, b) = (&lu[..n * n], &mut b[..n]);
+    for i in 0..n {
+        let coeff = b[i];
+        for r in i + 1..n {
+            b[r] += -coeff * m[i * n + r];
+        }
+    }
+    for i in (0..n).rev() {
+        let diag = m[i * n + i];
+        if diag == 0.0 {
+            return false;
+        }
+        let coeff = b[i] / diag;
+        b[i] = coeff;
+        for r in 0..i {
+            b[r] += -coeff * m[i * n + r];
+        }
+    }
+    true
 }
 
 #[cfg(test)]

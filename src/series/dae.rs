@@ -140,6 +140,10 @@ struct Engine<'p, P: DaeProblem + ?Sized> {
     lu: DenseLu,
     /// Right-hand side, then solution, of the order-p solve (reused).
     rhs: Vec<f64>,
+    /// The order-0 inputs (u, v, z, t) the tape was last propagated at.
+    loaded: Vec<f64>,
+    /// The last four terms of (u, v, z), for the geometric-series test (reused).
+    tail: Vec<Vec<f64>>,
 }
 
 impl<P: DaeProblem + ?Sized> Engine<'_, P> {
@@ -147,10 +151,21 @@ impl<P: DaeProblem + ?Sized> Engine<'_, P> {
         self.nd + self.na
     }
 
-    /// Sets the order-0 inputs and propagates.
+    /// Sets the order-0 inputs and propagates. A step's end-residual check
+    /// has already propagated the next step's start: that repeat is skipped.
     fn load0(&mut self, u: &[f64], vz: &[f64], t: f64) {
-        for (i, &x) in u.iter().chain(vz).chain([&t]).enumerate() {
-            self.tape.set_input(i, 0, x);
+        let x = || u.iter().chain(vz).chain([&t]);
+        if self.loaded.len() == self.n() + self.nd + 1
+            && x()
+                .zip(&self.loaded)
+                .all(|(a, b)| a.to_bits() == b.to_bits())
+        {
+            return;
+        }
+        self.loaded.clear();
+        self.loaded.extend(x());
+        for (i, &xi) in x().enumerate() {
+            self.tape.set_input(i, 0, xi);
         }
         self.tape.propagate(0);
     }
@@ -280,13 +295,14 @@ impl<P: DaeProblem + ?Sized> Engine<'_, P> {
 }
 
 /// Integrates from u0 at cfg.t0 to cfg.t_end. `on_step` receives every
-/// accepted step (for outputs) and may stop the run with an error.
+/// accepted step (for outputs; it keeps it if it wants, without a copy) and
+/// may stop the run with an error.
 pub fn run<P: DaeProblem + ?Sized>(
     problem: &P,
     u0: &[f64],
     init: &Initialization,
     cfg: &DaeConfig,
-    mut on_step: impl FnMut(&TimeStep, &Stats) -> Result<()>,
+    mut on_step: impl FnMut(TimeStep, &Stats) -> Result<()>,
 ) -> DaeResult {
     let nd = problem.n_diff();
     let na = problem.n_alg();
@@ -300,6 +316,8 @@ pub fn run<P: DaeProblem + ?Sized>(
         vz_cols: (nd..nd + nd + na).collect(),
         lu: DenseLu::default(),
         rhs: vec![0.0; nd + na],
+        loaded: Vec::new(),
+        tail: vec![vec![0.0; 2 * nd + na]; 4],
     };
     let finish = |stats: Stats, stop: &str, t: f64, error: Option<Error>, r0: f64| DaeResult {
         stats,
@@ -367,12 +385,13 @@ pub fn run<P: DaeProblem + ?Sized>(
                 } else {
                     step.t0 + step.length
                 };
-                u = y[..nd].to_vec();
-                vz = y[nd..].to_vec();
-                if let Err(e) = on_step(&step, &eng.stats) {
+                u.copy_from_slice(&y[..nd]);
+                vz.copy_from_slice(&y[nd..]);
+                let end_residual = step.end_residual;
+                if let Err(e) = on_step(step, &eng.stats) {
                     return finish(eng.stats, "", t, Some(e), r0);
                 }
-                if cfg.correct && step.end_residual > cfg.residual_tol {
+                if cfg.correct && end_residual > cfg.residual_tol {
                     if let Err(e) = eng.newton(&u, &mut vz, t, cfg.newton_tol, index) {
                         return finish(eng.stats, "", t, Some(e), r0);
                     }
@@ -453,10 +472,12 @@ fn time_step<P: DaeProblem + ?Sized>(
         });
     }
     let geometric = if n_ord >= 3 {
-        let tail: Vec<Vec<f64>> = (n_ord - 3..=n_ord)
-            .map(|p| series.iter().map(|c| c[p]).collect())
-            .collect();
-        super::geometric::detect_tail(n_ord, &tail).map(|g| g.distance)
+        for (term, p) in eng.tail.iter_mut().zip(n_ord - 3..) {
+            for (x, c) in term.iter_mut().zip(&series) {
+                *x = c[p];
+            }
+        }
+        super::geometric::detect_tail(n_ord, &eng.tail).map(|g| g.distance)
     } else {
         None
     };

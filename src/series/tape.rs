@@ -79,13 +79,15 @@ impl TapeBuilder {
 
     /// Freezes the record with the given outputs.
     pub fn finish(&self, outputs: &[Var<'_>], order: usize) -> Tape {
-        let outputs = outputs.iter().map(|v| v.id).collect();
+        let outputs: Vec<usize> = outputs.iter().map(|v| v.id).collect();
         let ops = self.ops.borrow().clone();
+        let inputs = self.inputs.borrow().clone();
         let stride = order + 1;
         Tape {
             coeffs: vec![0.0; ops.len() * stride],
+            read_later: tangents::read_later(&ops, &inputs, &outputs),
             ops,
-            inputs: self.inputs.borrow().clone(),
+            inputs,
             outputs,
             stride,
         }
@@ -194,6 +196,9 @@ pub struct Tape {
     /// Node-major storage: coefficient p of node i at `i * stride + p`.
     coeffs: Vec<f64>,
     stride: usize,
+    /// Nodes whose coefficient p is read after order p is propagated (see
+    /// [`Tape::add_to_order`]).
+    read_later: Vec<bool>,
 }
 
 impl Tape {

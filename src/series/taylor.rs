@@ -45,11 +45,18 @@ pub fn powf_coeff(a: &[f64], alpha: f64, w: &[f64], p: usize) -> f64 {
     if p == 0 {
         return a[0].powf(alpha);
     }
-    let s: f64 = (1..=p)
-        .zip(a[1..=p].iter().zip(w[..p].iter().rev()))
-        .map(|(k, (x, y))| (alpha * k as f64 - (p - k) as f64) * x * y)
+    // k and p - k counted in f64 (exact): no integer conversion per term.
+    let pf = p as f64;
+    let mut k = 0.0;
+    let s: f64 = a[1..=p]
+        .iter()
+        .zip(w[..p].iter().rev())
+        .map(|(x, y)| {
+            k += 1.0;
+            (alpha * k - (pf - k)) * x * y
+        })
         .sum();
-    s / (p as f64 * a[0])
+    s / (pf * a[0])
 }
 
 /// `w = exp(a)`: from w' = a' w, w_p = sum_{k=1}^{p} k a_k w_{p-k} / p.
@@ -63,9 +70,14 @@ pub fn exp_coeff(a: &[f64], w: &[f64], p: usize) -> f64 {
 /// sum_{k=1}^{p} k a_k w_{p-k}, the convolution of the exponential and
 /// trigonometric recurrences.
 fn k_weighted_conv(a: &[f64], w: &[f64], p: usize) -> f64 {
-    (1..=p)
-        .zip(a[1..=p].iter().zip(w[..p].iter().rev()))
-        .map(|(k, (x, y))| k as f64 * x * y)
+    let mut k = 0.0;
+    a[1..=p]
+        .iter()
+        .zip(w[..p].iter().rev())
+        .map(|(x, y)| {
+            k += 1.0;
+            k * x * y
+        })
         .sum()
 }
 
@@ -92,11 +104,12 @@ pub fn eval(c: &[f64], a: f64) -> f64 {
 
 /// Evaluates the derivative d/da of a series at `a`.
 pub fn eval_derivative(c: &[f64], a: f64) -> f64 {
-    c.iter()
-        .enumerate()
-        .skip(1)
-        .rev()
-        .fold(0.0, |acc, (k, &x)| acc * a + k as f64 * x)
+    // Weights k = N down to 1, counted in f64 (exact) rather than converted.
+    let mut k = c.len() as f64;
+    c.iter().skip(1).rev().fold(0.0, |acc, &x| {
+        k -= 1.0;
+        acc * a + k * x
+    })
 }
 
 /// A truncated power series `sum_{k=0}^{N} c_k a^k`, for direct use and tests.

@@ -11,8 +11,9 @@ pub struct Tangents {
     n_cols: usize,
     /// d node i / d column j at `i * n_cols + j`.
     dense: Vec<f64>,
-    /// Per column, the nodes with a nonzero tangent and that tangent, in node
-    /// order: most nodes do not depend on a given unknown.
+    /// Per column, the nodes with a nonzero tangent (as the offset of their
+    /// series in the tape's storage) and that tangent, in node order: most
+    /// nodes do not depend on a given unknown.
     nonzero: Vec<Vec<(usize, f64)>>,
 }
 
@@ -48,27 +49,32 @@ impl Tape {
         let k = cols.len();
         t.n_cols = k;
         t.dense.resize(self.ops.len() * k, 0.0);
-        self.tangent_pass(
-            k,
-            |input, j| if cols[j] == input { 1.0 } else { 0.0 },
-            &mut t.dense,
-        );
+        let seed = |input: usize, j: usize| if cols[j] == input { 1.0 } else { 0.0 };
+        // A constant direction count lets the compiler unroll the per-node
+        // loops for the usual handful of unknowns.
+        match k {
+            1 => self.tangent_pass(1, seed, &mut t.dense),
+            2 => self.tangent_pass(2, seed, &mut t.dense),
+            3 => self.tangent_pass(3, seed, &mut t.dense),
+            4 => self.tangent_pass(4, seed, &mut t.dense),
+            5 => self.tangent_pass(5, seed, &mut t.dense),
+            6 => self.tangent_pass(6, seed, &mut t.dense),
+            _ => self.tangent_pass(k, seed, &mut t.dense),
+        }
         t.nonzero.resize(k, Vec::new());
-        for (j, list) in t.nonzero.iter_mut().enumerate() {
-            list.clear();
-            list.extend(
-                t.dense
-                    .iter()
-                    .skip(j)
-                    .step_by(k)
-                    .enumerate()
-                    .filter(|(_, d)| **d != 0.0)
-                    .map(|(i, d)| (i, *d)),
-            );
+        t.nonzero.iter_mut().for_each(Vec::clear);
+        let rows = t.dense.chunks_exact(k.max(1));
+        for ((i, row), _) in rows.enumerate().zip(&self.read_later).filter(|(_, r)| **r) {
+            for (list, &d) in t.nonzero.iter_mut().zip(row) {
+                if d != 0.0 {
+                    list.push((i * self.stride, d));
+                }
+            }
         }
     }
 
-    /// Adds sum_j tangents[j] * x[j] to coefficient p of every node.
+    /// Adds sum_j tangents[j] * x[j] to coefficient p of every node that is
+    /// read later (see [`read_later`]).
     ///
     /// Coefficient p of each node is affine in the inputs' coefficients p,
     /// with the order-0 derivatives as slopes (every recurrence of
@@ -80,8 +86,8 @@ impl Tape {
             if xj == 0.0 {
                 continue;
             }
-            for &(i, ti) in list {
-                self.coeffs[i * self.stride + p] += ti * xj;
+            for &(offset, ti) in list {
+                self.coeffs[offset + p] += ti * xj;
             }
         }
     }
@@ -90,6 +96,7 @@ impl Tape {
     /// d node i / d direction j, direction j seeding input m with `dx(m, j)`.
     /// Each node's local derivative (a pow, a cosine) is computed once for
     /// all directions.
+    #[inline(always)]
     fn tangent_pass(&self, k: usize, dx: impl Fn(usize, usize) -> f64, out: &mut [f64]) {
         let v = |j: usize| self.coeffs[j * self.stride];
         let mut next_input = 0;
@@ -161,6 +168,46 @@ impl Tape {
     pub fn jacobian_entry(&self, tangents: &Tangents, row: usize, col: usize) -> f64 {
         tangents.get(self.outputs[row], col)
     }
+}
+
+/// The nodes whose coefficient p is read once order p has been propagated:
+/// inputs and outputs (the series and the residual), the arguments of the
+/// nonlinear operations (their recurrences read every lower coefficient of
+/// their arguments) and the nonlinear operations that read their own.
+/// Anything else (a linear node feeding only linear nodes) has its
+/// coefficient p read by order p's propagation alone, so the linear update
+/// may skip it.
+pub(super) fn read_later(ops: &[Op], inputs: &[usize], outputs: &[usize]) -> Vec<bool> {
+    let mut read = vec![false; ops.len()];
+    for &i in inputs.iter().chain(outputs) {
+        read[i] = true;
+    }
+    for (i, op) in ops.iter().enumerate() {
+        match *op {
+            Op::Mul(a, b) => {
+                read[a] = true;
+                read[b] = true;
+            }
+            Op::Div(a, b) => {
+                read[a] = true;
+                read[b] = true;
+                read[i] = true;
+            }
+            Op::Sqrt(a) | Op::Powf(a, _) | Op::Exp(a) | Op::Sin(a) => {
+                read[a] = true;
+                read[i] = true;
+            }
+            Op::CosOfPrevious => read[i] = true,
+            Op::Input
+            | Op::Const(_)
+            | Op::Add(..)
+            | Op::Sub(..)
+            | Op::Neg(_)
+            | Op::Scale(..)
+            | Op::Offset(..) => {}
+        }
+    }
+    read
 }
 
 fn each(own: &mut [f64], a: &[f64], f: impl Fn(f64) -> f64) {
