@@ -58,9 +58,22 @@ enum Command {
         /// Cases to run (comma-separated).
         #[arg(long, value_delimiter = ',', default_values_t = ["friction-1d".to_string(), "friction-plane".to_string(), "friction-roller".to_string()])]
         cases: Vec<String>,
-        /// Repetitions per setting (the median time is reported).
+        /// Repetitions per setting (the median and minimum are reported).
         #[arg(long, default_value_t = 3)]
         repeat: usize,
+        /// Error target of the head-to-head (target.md): the fastest ANM and
+        /// IDA settings reaching it are timed again, interleaved. A case whose
+        /// two references disagree by more than target / 1.2 is compared at
+        /// 1.2 x their difference.
+        #[arg(long, default_value_t = 1e-8)]
+        target: f64,
+        /// Interleaved rounds of the head-to-head.
+        #[arg(long, default_value_t = 100)]
+        rounds: usize,
+        /// Also count the instructions of each head-to-head contender with
+        /// valgrind's callgrind (a few seconds each).
+        #[arg(long)]
+        instructions: bool,
         #[arg(short, long, value_name = "DIR")]
         out: PathBuf,
     },
@@ -223,11 +236,20 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
             scenes,
             cases,
             repeat,
+            target,
+            rounds,
+            instructions,
             out,
         } => {
-            use anm::study::bench;
+            use anm::study::{bench, target as head};
             let with_ida = cfg!(feature = "reference");
+            let exe = if instructions {
+                Some(std::env::current_exe()?)
+            } else {
+                None
+            };
             let mut rows = vec![];
+            let mut heads = vec![];
             let mut reference_name = String::new();
             for case in &cases {
                 let (_, sc) = load(&scenes.join(format!("{case}.toml")))?;
@@ -240,18 +262,31 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
                     "{case}: reference {reference_name}; ANM(30, 1e-14) differs from it by {:.2e} on t <= {:.4}",
                     reference.anm_floor, reference.t_max
                 );
+                let methods = bench::friction_methods(with_ida);
                 let r = bench::work_precision(
                     case,
                     &sc,
-                    &bench::friction_methods(with_ida),
+                    &methods,
                     &reference.solution,
                     reference.t_max,
                     repeat,
                 );
                 print!("{}", bench::markdown(&r, &reference_name));
+                let h = head::head_to_head(
+                    case,
+                    &sc,
+                    &r,
+                    &methods,
+                    reference.target(target),
+                    rounds,
+                    exe.as_deref(),
+                )?;
+                heads.push(h);
                 rows.extend(r);
             }
             bench::write(&rows, &reference_name, &out)?;
+            head::write(&heads, &out)?;
+            print!("\n{}", head::markdown(&heads));
             println!("outputs in {}", out.display());
             Ok(ExitCode::SUCCESS)
         }

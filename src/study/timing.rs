@@ -84,13 +84,13 @@ pub fn interleaved(scene: &FrictionScene, methods: &[Method], repeat: usize) -> 
 }
 
 /// Instructions executed by one solve of `method` on the scene file, counted
-/// by callgrind in a child `anm time` process; None when valgrind is missing
-/// or the count cannot be read. The command, for reproduction:
+/// by callgrind in a child `anm time` process (`anm_exe`: the `anm` binary);
+/// None when valgrind is missing or the count cannot be read. The command,
+/// for reproduction:
 ///   valgrind --tool=callgrind --callgrind-out-file=/dev/null \
 ///     --collect-atstart=no --toggle-collect='*timing::measured_solve*' \
 ///     anm time SCENE --method METHOD --repeat 0
-pub fn instructions(scene_file: &Path, method: &Method) -> Option<u64> {
-    let exe = std::env::current_exe().ok()?;
+pub fn instructions(anm_exe: &Path, scene_file: &Path, method: &Method) -> Option<u64> {
     let out = Command::new("valgrind")
         .args([
             "--tool=callgrind",
@@ -98,7 +98,7 @@ pub fn instructions(scene_file: &Path, method: &Method) -> Option<u64> {
             "--collect-atstart=no",
             &format!("--toggle-collect={TOGGLE}"),
         ])
-        .arg(exe)
+        .arg(anm_exe)
         .arg("time")
         .arg(scene_file)
         .args(["--method", &method.spec(), "--repeat", "0"])
