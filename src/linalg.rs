@@ -15,7 +15,11 @@
 //! faer's automatic choice takes the simplicial (column-by-column) LU; the
 //! supernodal LU works on dense nodal blocks and is several times faster, so
 //! it is forced. Both run sequentially: the systems are far too small for
-//! threads to pay, and the machine is shared.
+//! threads to pay, and the machine is shared. Systems of a few unknowns
+//! (the friction DAEs) use the dense [`DenseLu`].
+
+mod dense_lu;
+pub use dense_lu::DenseLu;
 
 use std::sync::Arc;
 

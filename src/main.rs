@@ -58,7 +58,7 @@ enum Command {
         /// Cases to run (comma-separated).
         #[arg(long, value_delimiter = ',', default_values_t = ["friction-1d".to_string(), "friction-plane".to_string(), "friction-roller".to_string()])]
         cases: Vec<String>,
-        /// Repetitions per setting (the median time is reported).
+        /// Repetitions per setting (the median and minimum are reported).
         #[arg(long, default_value_t = 3)]
         repeat: usize,
         /// Scaling study instead of the cases: plate-cylinder strip meshes
@@ -68,8 +68,33 @@ enum Command {
         scaling: Vec<String>,
         #[arg(long, default_value_t = 10)]
         scaling_steps: usize,
+        /// Error target of the head-to-head (target.md): the fastest ANM and
+        /// IDA settings reaching it are timed again, interleaved. A case whose
+        /// two references disagree by more than target / 1.2 is compared at
+        /// 1.2 x their difference.
+        #[arg(long, default_value_t = 1e-8)]
+        target: f64,
+        /// Interleaved rounds of the head-to-head.
+        #[arg(long, default_value_t = 100)]
+        rounds: usize,
+        /// Also count the instructions of each head-to-head contender with
+        /// valgrind's callgrind (a few seconds each).
+        #[arg(long)]
+        instructions: bool,
         #[arg(short, long, value_name = "DIR")]
         out: PathBuf,
+    },
+    /// Time one method and setting on a friction scene: `repeat` solves after
+    /// a warm-up, wall min / median / max. Under callgrind (see
+    /// `anm::study::timing::instructions`) it gives the instruction count.
+    Time {
+        scene: PathBuf,
+        /// anm:ORDER:EPS (e.g. anm:15:1e-9) or ida:RTOL (e.g. ida:1e-10).
+        #[arg(long)]
+        method: anm::study::bench::Method,
+        /// Timed repetitions after a warm-up run; 0: a single run (for callgrind).
+        #[arg(long, default_value_t = 20)]
+        repeat: usize,
     },
     /// Solve a scene with an external reference solver.
     #[cfg(feature = "reference")]
@@ -220,9 +245,12 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
             repeat,
             scaling,
             scaling_steps,
+            target,
+            rounds,
+            instructions,
             out,
         } => {
-            use anm::study::bench;
+            use anm::study::{bench, target as head};
             if !scaling.is_empty() {
                 return bench_scaling(
                     &scenes.join("plate-cylinder.toml"),
@@ -232,7 +260,13 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
                 );
             }
             let with_ida = cfg!(feature = "reference");
+            let exe = if instructions {
+                Some(std::env::current_exe()?)
+            } else {
+                None
+            };
             let mut rows = vec![];
+            let mut heads = vec![];
             let mut reference_name = String::new();
             let mut shell_notes = String::new();
             for case in &cases {
@@ -250,15 +284,26 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
                     "{case}: reference {reference_name}; ANM(30, 1e-14) differs from it by {:.2e} on t <= {:.4}",
                     reference.anm_floor, reference.t_max
                 );
+                let methods = bench::friction_methods(with_ida);
                 let r = bench::work_precision(
                     case,
                     &sc,
-                    &bench::friction_methods(with_ida),
+                    &methods,
                     &reference.solution,
                     reference.t_max,
                     repeat,
                 );
                 print!("{}", bench::markdown(&r, &reference_name));
+                let h = head::head_to_head(
+                    case,
+                    &sc,
+                    &r,
+                    &methods,
+                    reference.target(target),
+                    rounds,
+                    exe.as_deref(),
+                )?;
+                heads.push(h);
                 rows.extend(r);
             }
             bench::write(&rows, &reference_name, &out)?;
@@ -267,7 +312,37 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
                 std::fs::write(&file, &shell_notes)
                     .with_context(|| format!("writing {}", file.display()))?;
             }
+            head::write(&heads, &out)?;
+            print!("\n{}", head::markdown(&heads));
             println!("outputs in {}", out.display());
+            Ok(ExitCode::SUCCESS)
+        }
+        Command::Time {
+            scene,
+            method,
+            repeat,
+        } => {
+            let (kind, friction) = load(&scene)?;
+            let Some(sc) = friction else {
+                anyhow::bail!("`anm time` runs friction scenes, not `{}`", kind.name());
+            };
+            // --repeat 0 (under callgrind): exactly one solve, no warm-up.
+            let timed =
+                anm::study::timing::interleaved(&sc, std::slice::from_ref(&method), repeat)?
+                    .remove(0);
+            let (spread, sol) = (timed.spread, timed.solution);
+            println!(
+                "{} {}: stop = {}, {} steps, {} factorizations; wall over {} runs: min {:.3e} s, median {:.3e} s, max {:.3e} s",
+                scene.display(),
+                method.spec(),
+                sol.stop,
+                sol.stats.steps,
+                sol.stats.factorizations,
+                spread.samples.len(),
+                spread.min(),
+                spread.median(),
+                spread.quantile(1.0)
+            );
             Ok(ExitCode::SUCCESS)
         }
         Command::Stress {

@@ -82,7 +82,7 @@ pub fn run(scene: &FrictionScene, out_dir: Option<&Path>, progress: bool) -> Res
         let t1 = step.t0 + step.length;
         while next < grid.len() && grid[next] <= t1 + 1e-12 * scene.t_end {
             let tg = grid[next];
-            history.push(model.row(tg, &step.eval(tg), &derivative(step, tg)));
+            history.push(model.row(tg, &step.eval(tg), &derivative(&step, tg)));
             next += 1;
         }
         let y = step.eval(t1);
@@ -94,9 +94,13 @@ pub fn run(scene: &FrictionScene, out_dir: Option<&Path>, progress: bool) -> Res
             model.slip(&y),
             step.geometric.unwrap_or(0.0),
         ];
-        row.extend(model.row(t1, &y, &derivative(step, t1)).into_iter().skip(1));
+        row.extend(
+            model
+                .row(t1, &y, &derivative(&step, t1))
+                .into_iter()
+                .skip(1),
+        );
         steps.push(row);
-        series.push(step.clone());
         if let Some(b) = &bar {
             b.set_position((1000.0 * t1 / scene.t_end) as u64);
             b.set_message(format!(
@@ -104,6 +108,7 @@ pub fn run(scene: &FrictionScene, out_dir: Option<&Path>, progress: bool) -> Res
                 stats.steps, step.length
             ));
         }
+        series.push(step);
         Ok(())
     });
     if let Some(b) = &bar {

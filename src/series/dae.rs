@@ -11,11 +11,10 @@
 //! with matrix J, the solve is exact, and the defect F_p after it is checked.
 
 use super::stats::{Stats, charge};
-use super::tape::{Tape, TapeBuilder, Var};
+use super::tape::{Tangents, Tape, TapeBuilder, Var};
 use super::taylor;
 use crate::error::{Error, Result};
-use crate::linalg::norm;
-use nalgebra::{DMatrix, DVector};
+use crate::linalg::{DenseLu, norm};
 use std::time::Instant;
 
 /// A semi-explicit index-1 DAE written once with tape arithmetic.
@@ -134,7 +133,17 @@ struct Engine<'p, P: DaeProblem + ?Sized> {
     na: usize,
     stats: Stats,
     /// d node / d(v, z) at the step's order-0 point (see `Tape::add_to_order`).
-    tangents: Vec<Vec<f64>>,
+    tangents: Tangents,
+    /// Tape input indices of (v, z): the Jacobian's columns.
+    vz_cols: Vec<usize>,
+    /// LU of dF/d(v, z) at the step start.
+    lu: DenseLu,
+    /// Right-hand side, then solution, of the order-p solve (reused).
+    rhs: Vec<f64>,
+    /// The order-0 inputs (u, v, z, t) the tape was last propagated at.
+    loaded: Vec<f64>,
+    /// The last four terms of (u, v, z), for the geometric-series test (reused).
+    tail: Vec<Vec<f64>>,
 }
 
 impl<P: DaeProblem + ?Sized> Engine<'_, P> {
@@ -142,38 +151,64 @@ impl<P: DaeProblem + ?Sized> Engine<'_, P> {
         self.nd + self.na
     }
 
-    /// Sets the order-0 inputs and propagates; returns F.
-    fn eval0(&mut self, u: &[f64], vz: &[f64], t: f64) -> Vec<f64> {
-        let mut x = u.to_vec();
-        x.extend_from_slice(vz);
-        x.push(t);
-        self.tape.eval(&x)
+    /// Sets the order-0 inputs and propagates. A step's end-residual check
+    /// has already propagated the next step's start: that repeat is skipped.
+    fn load0(&mut self, u: &[f64], vz: &[f64], t: f64) {
+        let x = || u.iter().chain(vz).chain([&t]);
+        if self.loaded.len() == self.n() + self.nd + 1
+            && x()
+                .zip(&self.loaded)
+                .all(|(a, b)| a.to_bits() == b.to_bits())
+        {
+            return;
+        }
+        self.loaded.clear();
+        self.loaded.extend(x());
+        for (i, &xi) in x().enumerate() {
+            self.tape.set_input(i, 0, xi);
+        }
+        self.tape.propagate(0);
     }
 
-    /// J = dF/d(v, z) at the current order-0 point, LU-factorized.
-    fn factorize(
-        &mut self,
-        step: usize,
-        t: f64,
-    ) -> Result<nalgebra::LU<f64, nalgebra::Dyn, nalgebra::Dyn>> {
+    /// |coefficient p of F|.
+    fn output_norm(&self, p: usize) -> f64 {
+        // Summed as `linalg::norm` sums.
+        (0..self.n())
+            .map(|j| self.tape.output(j, p))
+            .map(|x| x * x)
+            .sum::<f64>()
+            .sqrt()
+    }
+
+    /// Sets the order-0 inputs and propagates; returns F.
+    fn eval0(&mut self, u: &[f64], vz: &[f64], t: f64) -> Vec<f64> {
+        self.load0(u, vz, t);
+        (0..self.n()).map(|j| self.tape.output(j, 0)).collect()
+    }
+
+    /// J = dF/d(v, z) at the current order-0 point, LU-factorized into
+    /// `self.lu` (dense: the systems have a handful of unknowns).
+    fn factorize(&mut self, step: usize, t: f64) -> Result<()> {
         let start = Instant::now();
-        let cols: Vec<usize> = (self.nd..self.nd + self.n()).collect();
-        self.tangents = self.tape.node_tangents(&cols);
-        let rows = self.tape.jacobian_from(&self.tangents);
-        let n = self.n();
-        let j = DMatrix::from_fn(n, n, |r, c| rows[r][c]);
+        self.tape.update_tangents(&self.vz_cols, &mut self.tangents);
         charge(&mut self.stats.assembly_s, start);
         let start = Instant::now();
-        let lu = j.clone().lu();
+        let n = self.n();
+        let (tape, tangents) = (&self.tape, &self.tangents);
+        self.lu
+            .factorize(n, |r, c| tape.jacobian_entry(tangents, r, c));
         self.stats.factorizations += 1;
         charge(&mut self.stats.factorization_s, start);
         // Reciprocal condition estimate from the LU pivots, to name the trouble.
-        let diag: Vec<f64> = (0..n).map(|i| lu.u()[(i, i)].abs()).collect();
-        let (dmin, dmax) = diag
-            .iter()
-            .fold((f64::INFINITY, 0.0f64), |(a, b), &d| (a.min(d), b.max(d)));
+        let (mut dmin, mut dmax, mut worst) = (f64::INFINITY, 0.0f64, 0);
+        for i in 0..n {
+            let d = self.lu.pivot(i);
+            if d < dmin {
+                (dmin, worst) = (d, i);
+            }
+            dmax = dmax.max(d);
+        }
         if !(dmin > 1e-14 * dmax) {
-            let worst = diag.iter().position(|&d| d == dmin).unwrap_or(0);
             return Err(Error::SingularMatrix {
                 step,
                 param: "t",
@@ -185,22 +220,31 @@ impl<P: DaeProblem + ?Sized> Engine<'_, P> {
                 ),
             });
         }
-        Ok(lu)
+        Ok(())
     }
 
-    fn solve(
-        &mut self,
-        lu: &nalgebra::LU<f64, nalgebra::Dyn, nalgebra::Dyn>,
-        r: &[f64],
-    ) -> Vec<f64> {
+    /// x = -J^-1 r.
+    fn solve(&mut self, r: &[f64]) -> Vec<f64> {
         let start = Instant::now();
-        let b = DVector::from_iterator(r.len(), r.iter().map(|x| -x));
-        let x = lu
-            .solve(&b)
-            .unwrap_or_else(|| DVector::from_element(r.len(), f64::NAN));
+        let mut x: Vec<f64> = r.iter().map(|x| -x).collect();
+        if !self.lu.solve_in_place(&mut x) {
+            x.fill(f64::NAN);
+        }
         self.stats.solves += 1;
         charge(&mut self.stats.solve_s, start);
-        x.iter().copied().collect()
+        x
+    }
+
+    /// `rhs` <- -J^-1 (coefficient p of F), in place; untimed (the order loop
+    /// is timed as a whole: a clock read costs about as much as this solve).
+    fn solve_order(&mut self, p: usize) {
+        for j in 0..self.n() {
+            self.rhs[j] = -self.tape.output(j, p);
+        }
+        if !self.lu.solve_in_place(&mut self.rhs) {
+            self.rhs.fill(f64::NAN);
+        }
+        self.stats.solves += 1;
     }
 
     /// Damped Newton on F(u, ., t) = 0 for (v, z), from `vz`.
@@ -220,8 +264,8 @@ impl<P: DaeProblem + ?Sized> Engine<'_, P> {
                     tolerance: tol,
                 });
             }
-            let lu = self.factorize(step, t)?;
-            let dx = self.solve(&lu, &f);
+            self.factorize(step, t)?;
+            let dx = self.solve(&f);
             // Converged to roundoff: the Newton step no longer changes the
             // unknowns (a steep law can keep |F| above an absolute tolerance).
             if norm(&dx) <= 1e-14 * (norm(vz) + f64::MIN_POSITIVE) && res <= 1e3 * tol {
@@ -251,13 +295,14 @@ impl<P: DaeProblem + ?Sized> Engine<'_, P> {
 }
 
 /// Integrates from u0 at cfg.t0 to cfg.t_end. `on_step` receives every
-/// accepted step (for outputs) and may stop the run with an error.
+/// accepted step (for outputs; it keeps it if it wants, without a copy) and
+/// may stop the run with an error.
 pub fn run<P: DaeProblem + ?Sized>(
     problem: &P,
     u0: &[f64],
     init: &Initialization,
     cfg: &DaeConfig,
-    mut on_step: impl FnMut(&TimeStep, &Stats) -> Result<()>,
+    mut on_step: impl FnMut(TimeStep, &Stats) -> Result<()>,
 ) -> DaeResult {
     let nd = problem.n_diff();
     let na = problem.n_alg();
@@ -267,7 +312,12 @@ pub fn run<P: DaeProblem + ?Sized>(
         nd,
         na,
         stats: Stats::default(),
-        tangents: Vec::new(),
+        tangents: Tangents::default(),
+        vz_cols: (nd..nd + nd + na).collect(),
+        lu: DenseLu::default(),
+        rhs: vec![0.0; nd + na],
+        loaded: Vec::new(),
+        tail: vec![vec![0.0; 2 * nd + na]; 4],
     };
     let finish = |stats: Stats, stop: &str, t: f64, error: Option<Error>, r0: f64| DaeResult {
         stats,
@@ -335,12 +385,13 @@ pub fn run<P: DaeProblem + ?Sized>(
                 } else {
                     step.t0 + step.length
                 };
-                u = y[..nd].to_vec();
-                vz = y[nd..].to_vec();
-                if let Err(e) = on_step(&step, &eng.stats) {
+                u.copy_from_slice(&y[..nd]);
+                vz.copy_from_slice(&y[nd..]);
+                let end_residual = step.end_residual;
+                if let Err(e) = on_step(step, &eng.stats) {
                     return finish(eng.stats, "", t, Some(e), r0);
                 }
-                if cfg.correct && step.end_residual > cfg.residual_tol {
+                if cfg.correct && end_residual > cfg.residual_tol {
                     if let Err(e) = eng.newton(&u, &mut vz, t, cfg.newton_tol, index) {
                         return finish(eng.stats, "", t, Some(e), r0);
                     }
@@ -366,11 +417,11 @@ fn time_step<P: DaeProblem + ?Sized>(
 ) -> Result<TimeStep> {
     let (nd, n) = (eng.nd, eng.n());
     let n_ord = cfg.order;
-    eng.eval0(u0, vz0, t0);
-    let lu = eng.factorize(index, t0)?;
-    let scale = 1.0 + norm(&(0..n).map(|j| eng.tape.output(j, 0)).collect::<Vec<_>>());
+    eng.load0(u0, vz0, t0);
+    eng.factorize(index, t0)?;
+    let scale = 1.0 + eng.output_norm(0);
+    let start = Instant::now();
     for p in 1..=n_ord {
-        let start = Instant::now();
         for i in 0..nd {
             let vprev = eng.tape.input_series(nd + i)[p - 1];
             eng.tape.set_input(i, p, vprev / p as f64);
@@ -381,17 +432,14 @@ fn time_step<P: DaeProblem + ?Sized>(
         eng.tape
             .set_input(nd + n, p, if p == 1 { 1.0 } else { 0.0 });
         eng.tape.propagate(p);
-        let r: Vec<f64> = (0..n).map(|j| eng.tape.output(j, p)).collect();
         eng.stats.series_terms += 1;
-        charge(&mut eng.stats.series_s, start);
-        let x = eng.solve(&lu, &r);
+        eng.solve_order(p);
         // Store the solved coefficients in every node: an exact linear
         // update instead of a second propagation of order p.
-        let start = Instant::now();
-        eng.tape.add_to_order(p, &eng.tangents, &x);
-        charge(&mut eng.stats.series_s, start);
-        let defect = norm(&(0..n).map(|j| eng.tape.output(j, p)).collect::<Vec<_>>());
-        if !defect.is_finite() || x.iter().any(|v| !v.is_finite()) {
+        eng.tape.add_to_order(p, &eng.tangents, &eng.rhs);
+        let defect = eng.output_norm(p);
+        if !defect.is_finite() || eng.rhs.iter().any(|v| !v.is_finite()) {
+            charge(&mut eng.stats.series_s, start);
             return Err(Error::NonFinite {
                 step: index,
                 param: "t",
@@ -400,12 +448,13 @@ fn time_step<P: DaeProblem + ?Sized>(
             });
         }
     }
+    charge(&mut eng.stats.series_s, start);
     let series: Vec<Vec<f64>> = (0..nd + n)
         .map(|i| eng.tape.input_series(i).to_vec())
         .collect();
     // Ratio rule a = (eps |y_1| / |y_N|)^(1/(N-1)) on y = (u, v, z).
-    let term = |p: usize| series.iter().map(|c| c[p]).collect::<Vec<f64>>();
-    let (n1, nn) = (norm(&term(1)), norm(&term(n_ord)));
+    let term_norm = |p: usize| series.iter().map(|c| c[p] * c[p]).sum::<f64>().sqrt();
+    let (n1, nn) = (term_norm(1), term_norm(n_ord));
     let cap = 1e15f64.powf(1.0 / n_ord as f64);
     let a_max = if nn > 0.0 && n1 > 0.0 {
         (cfg.eps * n1 / nn)
@@ -422,8 +471,16 @@ fn time_step<P: DaeProblem + ?Sized>(
             length: a_max,
         });
     }
-    let terms: Vec<Vec<f64>> = (0..=n_ord).map(term).collect();
-    let geometric = super::geometric::detect(&terms).map(|g| g.distance);
+    let geometric = if n_ord >= 3 {
+        for (term, p) in eng.tail.iter_mut().zip(n_ord - 3..) {
+            for (x, c) in term.iter_mut().zip(&series) {
+                *x = c[p];
+            }
+        }
+        super::geometric::detect_tail(n_ord, &eng.tail).map(|g| g.distance)
+    } else {
+        None
+    };
     let length = a_max.min(cfg.t_end - t0);
     let mut step = TimeStep {
         index,
@@ -434,8 +491,8 @@ fn time_step<P: DaeProblem + ?Sized>(
         geometric,
     };
     let y = step.eval(t0 + length);
-    let f = eng.eval0(&y[..nd], &y[nd..], t0 + length);
+    eng.load0(&y[..nd], &y[nd..], t0 + length);
     eng.stats.residual_evaluations += 1;
-    step.end_residual = norm(&f) / scale;
+    step.end_residual = eng.output_norm(0) / scale;
     Ok(step)
 }

@@ -16,16 +16,23 @@ pub struct GeometricSeries {
 /// the reference: sum_p (alpha_p^(1/p)/alpha_1 - 1)^2 <= 1e-5 and
 /// sum_p |U_{N-p} - alpha_p U_N| / |U_{N-p}| <= 1e-4, p = 1..3.
 pub fn detect(terms: &[Vec<f64>]) -> Option<GeometricSeries> {
-    let n = terms.len() - 1;
+    let n = terms.len().checked_sub(1)?;
+    detect_tail(n, &terms[n.saturating_sub(3)..])
+}
+
+/// [`detect`] given only the last four terms U_{N-3}, ..., U_N of a series
+/// of order N (the test reads no others).
+pub fn detect_tail<T: AsRef<[f64]>>(n: usize, tail: &[T]) -> Option<GeometricSeries> {
     if n < 10 {
         return None;
     }
-    let un = &terms[n];
+    let term = |p: usize| tail[3 - p].as_ref();
+    let un = term(0);
     let un2 = dot(un, un);
     if !(un2 > 0.0) {
         return None;
     }
-    let alpha: Vec<f64> = (1..=3).map(|p| dot(&terms[n - p], un) / un2).collect();
+    let alpha = [1, 2, 3].map(|p| dot(term(p), un) / un2);
     if alpha[0] <= 0.0 {
         return None;
     }
@@ -35,16 +42,18 @@ pub fn detect(terms: &[Vec<f64>]) -> Option<GeometricSeries> {
         let ap = alpha[p - 1];
         let root = ap.signum() * ap.abs().powf(1.0 / p as f64);
         ratio_dev += (root / alpha[0] - 1.0).powi(2);
-        let diff: Vec<f64> = terms[n - p]
+        // |U_{N-p} - alpha_p U_N|, summed in the order of `norm`.
+        let diff2: f64 = term(p)
             .iter()
             .zip(un)
             .map(|(a, b)| a - ap * b)
-            .collect();
-        let den = norm(&terms[n - p]);
+            .map(|d| d * d)
+            .sum();
+        let den = norm(term(p));
         if den == 0.0 {
             return None;
         }
-        direction_dev += norm(&diff) / den;
+        direction_dev += diff2.sqrt() / den;
     }
     (ratio_dev <= 1e-5 && direction_dev <= 1e-4).then_some(GeometricSeries { distance: alpha[0] })
 }

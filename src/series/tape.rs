@@ -11,6 +11,9 @@ use super::taylor;
 use std::cell::RefCell;
 use std::ops::{Add, Div, Mul, Neg, Sub};
 
+mod tangents;
+pub use tangents::Tangents;
+
 #[derive(Clone, Copy, Debug)]
 enum Op {
     Input,
@@ -76,13 +79,15 @@ impl TapeBuilder {
 
     /// Freezes the record with the given outputs.
     pub fn finish(&self, outputs: &[Var<'_>], order: usize) -> Tape {
-        let outputs = outputs.iter().map(|v| v.id).collect();
+        let outputs: Vec<usize> = outputs.iter().map(|v| v.id).collect();
         let ops = self.ops.borrow().clone();
+        let inputs = self.inputs.borrow().clone();
         let stride = order + 1;
         Tape {
             coeffs: vec![0.0; ops.len() * stride],
+            read_later: tangents::read_later(&ops, &inputs, &outputs),
             ops,
-            inputs: self.inputs.borrow().clone(),
+            inputs,
             outputs,
             stride,
         }
@@ -191,6 +196,9 @@ pub struct Tape {
     /// Node-major storage: coefficient p of node i at `i * stride + p`.
     coeffs: Vec<f64>,
     stride: usize,
+    /// Nodes whose coefficient p is read after order p is propagated (see
+    /// [`Tape::add_to_order`]).
+    read_later: Vec<bool>,
 }
 
 impl Tape {
@@ -232,45 +240,53 @@ impl Tape {
     /// Computes coefficient `p` of every node from the input coefficients
     /// `0..=p` and the node coefficients `0..p` already stored.
     pub fn propagate(&mut self, p: usize) {
-        let stride = self.stride;
+        let s = self.stride;
+        let c = &mut self.coeffs;
+        // Coefficients 0..=p of node j: every recurrence reads its arguments
+        // (and its own lower coefficients) before the new value is stored.
+        fn upto(c: &[f64], j: usize, s: usize, p: usize) -> &[f64] {
+            &c[j * s..j * s + p + 1]
+        }
         let mut i = 0;
         while i < self.ops.len() {
-            let (before, rest) = self.coeffs.split_at_mut(i * stride);
-            let arg = |j: usize| &before[j * stride..(j + 1) * stride];
-            let own = &rest[..stride];
             let value = match self.ops[i] {
                 Op::Input => {
                     i += 1;
                     continue;
                 }
-                Op::Const(c) => {
+                Op::Const(k) => {
                     if p == 0 {
-                        c
+                        k
                     } else {
                         0.0
                     }
                 }
-                Op::Add(a, b) => arg(a)[p] + arg(b)[p],
-                Op::Sub(a, b) => arg(a)[p] - arg(b)[p],
-                Op::Mul(a, b) => taylor::mul_coeff(arg(a), arg(b), p),
-                Op::Div(a, b) => taylor::div_coeff(arg(a), arg(b), own, p),
-                Op::Neg(a) => -arg(a)[p],
-                Op::Scale(a, c) => c * arg(a)[p],
-                Op::Offset(a, c) => arg(a)[p] + if p == 0 { c } else { 0.0 },
-                Op::Sqrt(a) => taylor::sqrt_coeff(arg(a), own, p),
-                Op::Powf(a, alpha) => taylor::powf_coeff(arg(a), alpha, own, p),
-                Op::Exp(a) => taylor::exp_coeff(arg(a), own, p),
+                Op::Add(a, b) => c[a * s + p] + c[b * s + p],
+                Op::Sub(a, b) => c[a * s + p] - c[b * s + p],
+                Op::Mul(a, b) => taylor::mul_coeff(upto(c, a, s, p), upto(c, b, s, p), p),
+                Op::Div(a, b) => {
+                    taylor::div_coeff(upto(c, a, s, p), upto(c, b, s, p), upto(c, i, s, p), p)
+                }
+                Op::Neg(a) => -c[a * s + p],
+                Op::Scale(a, k) => k * c[a * s + p],
+                Op::Offset(a, k) => c[a * s + p] + if p == 0 { k } else { 0.0 },
+                Op::Sqrt(a) => taylor::sqrt_coeff(upto(c, a, s, p), upto(c, i, s, p), p),
+                Op::Powf(a, alpha) => {
+                    taylor::powf_coeff(upto(c, a, s, p), alpha, upto(c, i, s, p), p)
+                }
+                Op::Exp(a) => taylor::exp_coeff(upto(c, a, s, p), upto(c, i, s, p), p),
                 Op::Sin(a) => {
-                    let (sin, cos) = rest.split_at_mut(stride);
-                    let x = &before[a * stride..(a + 1) * stride];
-                    sin[p] = taylor::sin_coeff(x, cos, p);
-                    cos[p] = taylor::cos_coeff(x, sin, p);
+                    // sin_p reads cos_0..p-1 and cos_p reads sin_0..p-1.
+                    let sin = taylor::sin_coeff(upto(c, a, s, p), upto(c, i + 1, s, p), p);
+                    let cos = taylor::cos_coeff(upto(c, a, s, p), upto(c, i, s, p), p);
+                    c[i * s + p] = sin;
+                    c[(i + 1) * s + p] = cos;
                     i += 2;
                     continue;
                 }
                 Op::CosOfPrevious => unreachable!("cosine nodes are propagated with their sine"),
             };
-            rest[p] = value;
+            c[i * s + p] = value;
             i += 1;
         }
     }
@@ -282,92 +298,6 @@ impl Tape {
         }
         self.propagate(0);
         (0..self.n_outputs()).map(|j| self.output(j, 0)).collect()
-    }
-
-    /// Directional derivative of the outputs at the order-0 point (forward
-    /// tangent pass on the stored constant terms): returns J * `dx`.
-    pub fn jvp(&self, dx: &[f64]) -> Vec<f64> {
-        let dot = self.node_jvp(dx);
-        self.outputs.iter().map(|&o| dot[o]).collect()
-    }
-
-    /// d node / d inputs[col] at the order-0 point, for every node: one
-    /// vector per column.
-    pub fn node_tangents(&self, cols: &[usize]) -> Vec<Vec<f64>> {
-        let mut dx = vec![0.0; self.n_inputs()];
-        cols.iter()
-            .map(|&c| {
-                dx[c] = 1.0;
-                let t = self.node_jvp(&dx);
-                dx[c] = 0.0;
-                t
-            })
-            .collect()
-    }
-
-    /// Adds sum_j tangents[j] * x[j] to coefficient p of every node.
-    ///
-    /// Coefficient p of each node is affine in the inputs' coefficients p,
-    /// with the order-0 derivatives as slopes (every recurrence of
-    /// [`super::taylor`] weights its arguments' top coefficient by the
-    /// derivative at order 0). So after propagating order p with some inputs'
-    /// coefficient p at zero, setting them to x is this update, exactly.
-    pub fn add_to_order(&mut self, p: usize, tangents: &[Vec<f64>], x: &[f64]) {
-        for (t, &xj) in tangents.iter().zip(x) {
-            if xj == 0.0 {
-                continue;
-            }
-            for (i, ti) in t.iter().enumerate() {
-                if *ti != 0.0 {
-                    self.coeffs[i * self.stride + p] += ti * xj;
-                }
-            }
-        }
-    }
-
-    /// Forward tangent pass: d node / d inputs · dx for every node.
-    fn node_jvp(&self, dx: &[f64]) -> Vec<f64> {
-        let v = |j: usize| self.coeffs[j * self.stride];
-        let mut dot = vec![0.0; self.ops.len()];
-        let mut next_input = 0;
-        for (i, op) in self.ops.iter().enumerate() {
-            dot[i] = match *op {
-                Op::Input => {
-                    next_input += 1;
-                    dx[next_input - 1]
-                }
-                Op::Const(_) => 0.0,
-                Op::Add(a, b) => dot[a] + dot[b],
-                Op::Sub(a, b) => dot[a] - dot[b],
-                Op::Mul(a, b) => dot[a] * v(b) + v(a) * dot[b],
-                Op::Div(a, b) => (dot[a] - v(i) * dot[b]) / v(b),
-                Op::Neg(a) => -dot[a],
-                Op::Scale(a, c) => c * dot[a],
-                Op::Offset(a, _) => dot[a],
-                Op::Sqrt(a) => dot[a] / (2.0 * v(i)),
-                Op::Powf(a, alpha) => alpha * v(a).powf(alpha - 1.0) * dot[a],
-                Op::Exp(a) => v(i) * dot[a],
-                Op::Sin(a) => v(a).cos() * dot[a],
-                Op::CosOfPrevious => match self.ops[i - 1] {
-                    Op::Sin(a) => -v(a).sin() * dot[a],
-                    _ => unreachable!("a cosine node always follows its sine"),
-                },
-            };
-        }
-        dot
-    }
-
-    /// Dense Jacobian d outputs / d inputs[cols] at the order-0 point, row-major.
-    pub fn jacobian(&self, cols: &[usize]) -> Vec<Vec<f64>> {
-        self.jacobian_from(&self.node_tangents(cols))
-    }
-
-    /// The Jacobian rows read off node tangents ([`Tape::node_tangents`]).
-    pub fn jacobian_from(&self, tangents: &[Vec<f64>]) -> Vec<Vec<f64>> {
-        self.outputs
-            .iter()
-            .map(|&o| tangents.iter().map(|t| t[o]).collect())
-            .collect()
     }
 }
 

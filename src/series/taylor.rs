@@ -8,12 +8,21 @@
 
 /// `w = a * b`: w_p = sum_{k=0}^{p} a_k b_{p-k}.
 pub fn mul_coeff(a: &[f64], b: &[f64], p: usize) -> f64 {
-    (0..=p).map(|k| a[k] * b[p - k]).sum()
+    // Zipped slices instead of indices: no bounds check per term.
+    a[..=p]
+        .iter()
+        .zip(b[..=p].iter().rev())
+        .map(|(x, y)| x * y)
+        .sum()
 }
 
 /// `w = a / b`: w_p = (a_p - sum_{k=1}^{p} b_k w_{p-k}) / b_0.
 pub fn div_coeff(a: &[f64], b: &[f64], w: &[f64], p: usize) -> f64 {
-    let s: f64 = (1..=p).map(|k| b[k] * w[p - k]).sum();
+    let s: f64 = b[1..=p]
+        .iter()
+        .zip(w[..p].iter().rev())
+        .map(|(x, y)| x * y)
+        .sum();
     (a[p] - s) / b[0]
 }
 
@@ -22,7 +31,11 @@ pub fn sqrt_coeff(a: &[f64], w: &[f64], p: usize) -> f64 {
     if p == 0 {
         return a[0].sqrt();
     }
-    let s: f64 = (1..p).map(|k| w[k] * w[p - k]).sum();
+    let s: f64 = w[1..p]
+        .iter()
+        .zip(w[1..p].iter().rev())
+        .map(|(x, y)| x * y)
+        .sum();
     (a[p] - s) / (2.0 * w[0])
 }
 
@@ -32,10 +45,18 @@ pub fn powf_coeff(a: &[f64], alpha: f64, w: &[f64], p: usize) -> f64 {
     if p == 0 {
         return a[0].powf(alpha);
     }
-    let s: f64 = (1..=p)
-        .map(|k| (alpha * k as f64 - (p - k) as f64) * a[k] * w[p - k])
+    // k and p - k counted in f64 (exact): no integer conversion per term.
+    let pf = p as f64;
+    let mut k = 0.0;
+    let s: f64 = a[1..=p]
+        .iter()
+        .zip(w[..p].iter().rev())
+        .map(|(x, y)| {
+            k += 1.0;
+            (alpha * k - (pf - k)) * x * y
+        })
         .sum();
-    s / (p as f64 * a[0])
+    s / (pf * a[0])
 }
 
 /// `w = exp(a)`: from w' = a' w, w_p = sum_{k=1}^{p} k a_k w_{p-k} / p.
@@ -43,8 +64,21 @@ pub fn exp_coeff(a: &[f64], w: &[f64], p: usize) -> f64 {
     if p == 0 {
         return a[0].exp();
     }
-    let s: f64 = (1..=p).map(|k| k as f64 * a[k] * w[p - k]).sum();
-    s / p as f64
+    k_weighted_conv(a, w, p) / p as f64
+}
+
+/// sum_{k=1}^{p} k a_k w_{p-k}, the convolution of the exponential and
+/// trigonometric recurrences.
+fn k_weighted_conv(a: &[f64], w: &[f64], p: usize) -> f64 {
+    let mut k = 0.0;
+    a[1..=p]
+        .iter()
+        .zip(w[..p].iter().rev())
+        .map(|(x, y)| {
+            k += 1.0;
+            k * x * y
+        })
+        .sum()
 }
 
 /// `s = sin(a)` given `c = cos(a)`: s' = a' c, s_p = sum_{k=1}^{p} k a_k c_{p-k} / p.
@@ -52,8 +86,7 @@ pub fn sin_coeff(a: &[f64], c: &[f64], p: usize) -> f64 {
     if p == 0 {
         return a[0].sin();
     }
-    let s: f64 = (1..=p).map(|k| k as f64 * a[k] * c[p - k]).sum();
-    s / p as f64
+    k_weighted_conv(a, c, p) / p as f64
 }
 
 /// `c = cos(a)` given `s = sin(a)`: c' = -a' s, c_p = -sum_{k=1}^{p} k a_k s_{p-k} / p.
@@ -61,8 +94,7 @@ pub fn cos_coeff(a: &[f64], s: &[f64], p: usize) -> f64 {
     if p == 0 {
         return a[0].cos();
     }
-    let sum: f64 = (1..=p).map(|k| k as f64 * a[k] * s[p - k]).sum();
-    -sum / p as f64
+    -k_weighted_conv(a, s, p) / p as f64
 }
 
 /// Evaluates a series at `a` by Horner's rule.
@@ -72,11 +104,12 @@ pub fn eval(c: &[f64], a: f64) -> f64 {
 
 /// Evaluates the derivative d/da of a series at `a`.
 pub fn eval_derivative(c: &[f64], a: f64) -> f64 {
-    c.iter()
-        .enumerate()
-        .skip(1)
-        .rev()
-        .fold(0.0, |acc, (k, &x)| acc * a + k as f64 * x)
+    // Weights k = N down to 1, counted in f64 (exact) rather than converted.
+    let mut k = c.len() as f64;
+    c.iter().skip(1).rev().fold(0.0, |acc, &x| {
+        k -= 1.0;
+        acc * a + k * x
+    })
 }
 
 /// A truncated power series `sum_{k=0}^{N} c_k a^k`, for direct use and tests.

@@ -274,6 +274,7 @@ pub fn work_precision(
                     per(st.solve_s),
                     per(st.series_s),
                 ];
+                let wall_min_s = walls.iter().copied().fold(f64::INFINITY, f64::min);
                 let wall_s = median(walls);
                 if let ShellMethod::Anm { order, .. } = m {
                     costs.push(StepCost {
@@ -292,6 +293,7 @@ pub fn work_precision(
                     setting: m.setting(),
                     error: uz_error(&r, reference),
                     wall_s,
+                    wall_min_s,
                     steps: st.steps,
                     factorizations: st.factorizations,
                     solves: st.solves,
@@ -305,6 +307,7 @@ pub fn work_precision(
                 setting: m.setting(),
                 error: f64::NAN,
                 wall_s: f64::NAN,
+                wall_min_s: f64::NAN,
                 steps: 0,
                 factorizations: 0,
                 solves: 0,

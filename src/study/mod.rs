@@ -1,5 +1,6 @@
 //! Studies built on runs: the independent check of friction outputs, the
-//! regularization audit, the stability stress matrix and the benchmarks.
+//! regularization audit, the stability stress matrix, and the benchmarks
+//! (work-precision, head-to-head at an error target, and their timing).
 
 pub mod audit;
 pub mod bench;
@@ -8,3 +9,5 @@ pub mod check;
 pub mod pool;
 pub mod scaling;
 pub mod stress;
+pub mod target;
+pub mod timing;
