@@ -73,7 +73,7 @@ pub const SYM_PAIRS: [(usize, usize); NSYM] = {
     }
     pairs
 };
-/// SYM_INDEX[a][b]: position of the pair (a, b) or (b, a) in SYM_PAIRS.
+/// `SYM_INDEX[a][b]`: position of the pair (a, b) or (b, a) in SYM_PAIRS.
 pub const SYM_INDEX: [[usize; NCOL]; NCOL] = {
     let mut index = [[0; NCOL]; NCOL];
     let mut k = 0;
@@ -195,9 +195,9 @@ pub fn shape(xi: f64, eta: f64) -> ([f64; 4], [f64; 4], [f64; 4]) {
 /// Interpolation weights of the five point vectors at one point (ξ, η).
 #[derive(Clone, Debug)]
 pub struct Point {
-    /// phi[k][I]: weight of node I in vector k.
+    /// `phi[k][I]`: weight of node I in vector k.
     pub phi: [[f64; 4]; 5],
-    /// w[k][c]: weight of column c of Y in vector k (the position weights
+    /// `w[k][c]`: weight of column c of Y in vector k (the position weights
     /// of nodes 1..3 on the differences, since those of a1, a2 sum to 0).
     w: [[f64; NCOL]; 5],
 }

@@ -19,8 +19,9 @@
 //! matrices instead of the 12 sampling points, and the strain-to-stress path
 //! (ANS, EAS, material) costs one 28×28 product per order.
 //!
-//! Order 0 is taken pointwise from the full state ([`ShellElement::
-//! state_geometric`]): M_0 would subtract two nearly equal Gram matrices.
+//! Order 0 is taken pointwise from the full state
+//! ([`ShellElement::state_geometric`]): M_0 would subtract two nearly equal
+//! Gram matrices.
 
 use super::element::{ElementMatrix, GramJacobian, ShellElement};
 use super::kinematics::{
