@@ -115,7 +115,12 @@ impl PathStep {
     /// Path parameter a at which lambda(a) = target, if it lies in [0, length]
     /// (Newton on the series, started by bisection-safe bracketing).
     pub fn a_at_lambda(&self, target: f64) -> Option<f64> {
-        let f = |a: f64| self.eval(a).1 - target;
+        // lambda alone where the representation allows (the polynomial):
+        // bisection evaluates it 100 times.
+        let f = |a: f64| match &self.pade {
+            Some(_) => self.eval(a).1 - target,
+            None => super::taylor::eval(&self.lambda, a) - target,
+        };
         let (f0, f1) = (f(0.0), f(self.length));
         if f0 == 0.0 {
             return Some(0.0);
