@@ -22,6 +22,17 @@ pub struct Panel<'a> {
 
 const COLORS: [RGBColor; 6] = [BLUE, RED, GREEN, MAGENTA, CYAN, BLACK];
 
+/// A tick label: the shortest form, or 2 significant digits in exponent
+/// form when that is long (log axes give values such as 9.999999999999999e-5).
+fn tick(v: f64) -> String {
+    let plain = format!("{v}");
+    if plain.len() <= 6 {
+        plain
+    } else {
+        format!("{v:.1e}").replace(".0e", "e")
+    }
+}
+
 fn bounds(values: impl Iterator<Item = f64>, log: bool) -> (f64, f64) {
     let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
     for v in values.filter(|v| v.is_finite() && (!log || *v > 0.0)) {
@@ -77,6 +88,8 @@ pub fn draw(path: &Path, panels: &[Panel]) -> Result<()> {
                     .configure_mesh()
                     .x_desc(panel.x_label)
                     .y_desc(panel.y_label)
+                    .x_label_formatter(&|v| tick(*v))
+                    .y_label_formatter(&|v| tick(*v))
                     .draw()
                     .map_err(|e| err(e.to_string()))?;
                 for (i, c) in panel.curves.iter().enumerate() {
