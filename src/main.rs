@@ -102,12 +102,16 @@ enum Command {
         #[command(subcommand)]
         solver: ReferenceSolver,
     },
-    /// Stability stress matrix on the friction scenes: every run must meet its
-    /// accuracy check or stop with a diagnosis (stress.md, stress.csv).
+    /// Stability stress matrix on the friction scenes and the coarse
+    /// plate-cylinder: every run must meet its accuracy check or stop with a
+    /// diagnosis (stress.md, stress.csv).
     Stress {
-        /// Folder holding friction-1d.toml, friction-plane.toml, friction-roller.toml.
+        /// Folder holding the scenes named by --cases.
         #[arg(long, default_value = "scenes")]
         scenes: PathBuf,
+        /// Scenes to stress (file stems in --scenes, comma-separated).
+        #[arg(long, value_delimiter = ',', default_values_t = ["friction-1d".to_string(), "friction-plane".to_string(), "friction-roller".to_string(), "plate-cylinder-coarse".to_string()])]
+        cases: Vec<String>,
         /// Step budget per run.
         #[arg(long, default_value_t = 20000)]
         max_steps: usize,
@@ -211,18 +215,28 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
             out,
         } => {
             let (kind, friction) = load(&scene)?;
-            let Some(sc) = friction else {
-                anyhow::bail!(
-                    "{}: the audit of `{}` scenes is not available in this build",
-                    scene.display(),
-                    kind.name()
-                );
-            };
             let sweeps = anm::study::audit::Sweeps {
                 omega,
                 zeta,
                 eta,
                 penalty,
+            };
+            let Some(sc) = friction else {
+                let sc = anm::scene::shell::load(&scene)?;
+                if sweeps.eta.is_empty() && sweeps.penalty.is_empty() {
+                    // Names the offending option when omega or zeta was given.
+                    anm::study::shell_audit::audit(&sc, &sweeps)?;
+                    anyhow::bail!(
+                        "{}: nothing to sweep: give at least one of --eta, --penalty (`{}` is frictionless)",
+                        scene.display(),
+                        kind.name()
+                    );
+                }
+                let rows = anm::study::shell_audit::audit(&sc, &sweeps)?;
+                anm::study::shell_audit::write(&sc, &rows, &out)?;
+                print!("{}", anm::study::shell_audit::markdown(&sc, &rows));
+                println!("\noutputs in {}", out.display());
+                return Ok(ExitCode::SUCCESS);
             };
             if sweeps.omega.is_empty()
                 && sweeps.zeta.is_empty()
@@ -347,17 +361,26 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
         }
         Command::Stress {
             scenes,
+            cases,
             max_steps,
             out,
         } => {
+            use anm::study::stress;
             let mut list = vec![];
-            for name in ["friction-1d", "friction-plane", "friction-roller"] {
+            let mut shells = vec![];
+            for name in &cases {
                 let path = scenes.join(format!("{name}.toml"));
-                let (_, sc) = load(&path)?;
-                list.push(sc.expect("friction scene"));
+                match load(&path)? {
+                    (_, Some(sc)) => list.push(sc),
+                    (_, None) => shells.push((name.clone(), anm::scene::shell::load(&path)?)),
+                }
             }
-            let cases =
-                anm::study::stress::stress(&list, &anm::study::stress::full_axes(), max_steps);
+            let mut cases = stress::stress(&list, &stress::full_axes(), max_steps);
+            cases.extend(stress::stress_shell(
+                &shells,
+                &stress::shell_axes(),
+                max_steps,
+            ));
             anm::output::create_dir(&out)?;
             let md = anm::study::stress::markdown(&cases);
             std::fs::write(out.join("stress.md"), &md)
@@ -373,6 +396,7 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
                 "max_relative_residual",
                 "wall_s",
                 "message",
+                "detail",
             ])?;
             for c in &cases {
                 w.write_record([
@@ -385,6 +409,7 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
                     format!("{:e}", c.residual),
                     format!("{:e}", c.wall_s),
                     c.message.clone(),
+                    c.detail.clone(),
                 ])?;
             }
             w.flush()?;

@@ -206,3 +206,50 @@ fn triangle_mesh_is_rejected_with_the_element_type() {
         ],
     );
 }
+
+/// `anm audit` on plate-cylinder: friction options and bad values are
+/// rejected before any run, naming the file and the option; no output.
+#[test]
+fn audit_rejects_friction_options_and_bad_values() {
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/plate-cylinder-coarse.toml");
+    for (args, needles) in [
+        (vec!["--omega", "0.1"], vec!["--omega", "frictionless"]),
+        (
+            vec!["--eta", "1e-6", "--zeta", "0.1"],
+            vec!["--zeta", "frictionless"],
+        ),
+        (vec!["--eta=-1e-6"], vec!["--eta", "finite and > 0"]),
+        (
+            vec!["--penalty", "nan"],
+            vec!["--penalty", "finite and > 0"],
+        ),
+        (
+            vec!["--penalty", "1e-3"],
+            vec!["--penalty", "below K delta"],
+        ),
+        (vec![], vec!["nothing to sweep", "--eta"]),
+    ] {
+        let out = tmp("audit-rejected");
+        let _ = std::fs::remove_dir_all(&out);
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_anm"))
+            .arg("audit")
+            .arg(&scene)
+            .args(&args)
+            .arg("-o")
+            .arg(&out)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        println!("{args:?}: exit {:?}: {err}", o.status.code());
+        assert_ne!(o.status.code(), Some(0), "{args:?} must fail");
+        assert!(!err.contains("panicked"), "panic: {err}");
+        assert!(
+            err.contains(&scene.display().to_string()),
+            "error does not name the file: {err}"
+        );
+        for n in needles {
+            assert!(err.contains(n), "error does not mention `{n}`: {err}");
+        }
+        assert!(!out.exists(), "no output for rejected input");
+    }
+}

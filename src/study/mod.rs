@@ -1,6 +1,7 @@
-//! Studies built on runs: the independent check of friction outputs, the
-//! regularization audit, the stability stress matrix, and the benchmarks
-//! (work-precision, head-to-head at an error target, and their timing).
+//! Studies built on runs: the independent checks of friction and
+//! plate-cylinder outputs, the regularization audits, the stability stress
+//! matrix, and the benchmarks (work-precision, head-to-head at an error
+//! target, and their timing).
 
 pub mod audit;
 pub mod bench;
@@ -8,6 +9,8 @@ pub mod bench_shell;
 pub mod check;
 pub mod pool;
 pub mod scaling;
+pub mod shell_audit;
+pub mod shell_check;
 pub mod stress;
 pub mod target;
 pub mod timing;

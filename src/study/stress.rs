@@ -3,7 +3,12 @@
 //!
 //! Each axis varies one parameter of a canonical scene. A run is
 //! - **met**: it ended (or stopped at a detected singularity) and its output
-//!   solves the physical equations ([`super::check`]) to `tolerance`;
+//!   solves the physical equations to [`TOLERANCE`] (friction:
+//!   [`super::check`]; plate-cylinder: the full residual |R(U, lambda)| / |F|
+//!   with every candidate node carrying eq. 3, re-evaluated from the output
+//!   on every lambda of the grid, [`super::shell_check`]; and, where eta and
+//!   K are at the scene's values, uz_A(1) within [`UZ_A_TOLERANCE`] of the
+//!   scene's canonical figure);
 //! - **diagnosed**: it stopped on an error or a step budget with a message
 //!   naming what happened, and the output it did write solves the equations;
 //! - **failed**: a panic, a non-finite number in the output, or output that
@@ -11,12 +16,29 @@
 
 use super::check::max_relative_residual;
 use super::pool;
+use super::shell_check::{check, with_grid_snapshots};
 use crate::model::friction_run::run;
+use crate::model::plate_cylinder::run_loaded;
 use crate::scene::Kind;
 use crate::scene::friction::FrictionScene;
+use crate::scene::shell::ShellScene;
 
 /// Relative residual an output row may have.
 pub const TOLERANCE: f64 = 1e-6;
+
+/// How far (m) uz_A(1) may sit from the canonical figure, printed to 1e-6 m:
+/// one unit of its last digit.
+pub const UZ_A_TOLERANCE: f64 = 1e-6;
+
+/// uz_A at lambda = 1 (m) of the canonical plate-cylinder scenes at their own
+/// eta, K (README, "mesh convergence"), by scene file stem.
+pub fn canonical_uz_a(name: &str) -> Option<f64> {
+    match name {
+        "plate-cylinder-coarse" => Some(0.705805),
+        "plate-cylinder" => Some(0.704971),
+        _ => None,
+    }
+}
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Verdict {
@@ -36,6 +58,9 @@ pub struct StressCase {
     pub residual: f64,
     pub steps: usize,
     pub wall_s: f64,
+    /// Further figures of the check (plate-cylinder: uz_A(1), the lambda of
+    /// the largest residual, whether far candidates were skipped).
+    pub detail: String,
 }
 
 /// The axes of the full matrix (issue 5, item 7).
@@ -102,6 +127,7 @@ pub fn stress(
                 residual: f64::NAN,
                 steps: 0,
                 wall_s: 0.0,
+                detail: String::new(),
             },
             Ok(Err(e)) => StressCase {
                 scene,
@@ -113,6 +139,7 @@ pub fn stress(
                 residual: 0.0,
                 steps: 0,
                 wall_s: 0.0,
+                detail: String::new(),
             },
             Ok(Ok(run)) => {
                 let residual = max_relative_residual(&s, &run.columns, &run.history);
@@ -134,6 +161,151 @@ pub fn stress(
                     residual,
                     steps: run.stats.steps,
                     wall_s: run.wall_s,
+                    detail: String::new(),
+                }
+            }
+        })
+        .collect()
+}
+
+/// The axes of the plate-cylinder matrix (issue 5, item 7).
+pub fn shell_axes() -> Vec<(&'static str, Vec<f64>)> {
+    vec![
+        ("eta", vec![1e-8, 1e-6, 1e-4, 1e-2, 1.0]),
+        ("K", vec![1e3, 1e6, 1e9, 1e12]),
+        ("order", vec![5.0, 10.0, 20.0, 40.0]),
+    ]
+}
+
+fn apply_shell(scene: &ShellScene, axis: &str, value: f64) -> Option<ShellScene> {
+    let mut s = scene.clone();
+    match axis {
+        "eta" => s.contact_eta = value,
+        "K" => s.contact_k = value,
+        "order" => s.solver.order = value as usize,
+        _ => return None,
+    }
+    Some(s)
+}
+
+/// Runs the matrix on plate-cylinder scenes `(name, scene)` (in parallel),
+/// with a step budget per run; axes other than eta, K and order do not apply
+/// to the frictionless shell and are left out.
+pub fn stress_shell(
+    scenes: &[(String, ShellScene)],
+    axes: &[(&'static str, Vec<f64>)],
+    max_steps: usize,
+) -> Vec<StressCase> {
+    let mut jobs = vec![];
+    for (name, sc) in scenes {
+        for (axis, values) in axes {
+            for &v in values {
+                let Some(mut s) = apply_shell(sc, axis, v) else {
+                    continue;
+                };
+                s.solver.max_steps = s.solver.max_steps.min(max_steps);
+                let at_scene_values = match *axis {
+                    "eta" => v == sc.contact_eta,
+                    "K" => v == sc.contact_k,
+                    _ => true,
+                };
+                let uz_ref = canonical_uz_a(name).filter(|_| at_scene_values);
+                jobs.push((name.clone(), *axis, v, with_grid_snapshots(&s), uz_ref));
+            }
+        }
+    }
+    let results = pool::map(&jobs, |(_, _, _, s, _)| {
+        let report = run_loaded(s, None, false)?;
+        let c = check(s, &report)?;
+        Ok::<_, crate::Error>((report, c))
+    });
+    jobs.into_iter()
+        .zip(results)
+        .map(|((scene, axis, value, _, uz_ref), r)| match r {
+            Err(panic) => StressCase {
+                scene,
+                axis,
+                value,
+                verdict: Verdict::Failed,
+                stop: "panic".into(),
+                message: panic,
+                residual: f64::NAN,
+                steps: 0,
+                wall_s: 0.0,
+                detail: String::new(),
+            },
+            Ok(Err(e)) => StressCase {
+                scene,
+                axis,
+                value,
+                verdict: Verdict::Diagnosed,
+                stop: e.kind().into(),
+                message: e.to_string(),
+                residual: 0.0,
+                steps: 0,
+                wall_s: 0.0,
+                detail: String::new(),
+            },
+            Ok(Ok((run, c))) => {
+                let finite = run.history.iter().flatten().all(|x| x.is_finite())
+                    && run.uz_a_end.is_finite();
+                let normal = run.stop.reason == "end";
+                let uz1 = run.uz_at(1.0);
+                let mut problems = vec![];
+                if !finite {
+                    problems.push("non-finite value in the output".to_string());
+                }
+                if !(c.max_residual <= TOLERANCE) {
+                    problems.push(format!(
+                        "residual |R|/|F| = {:.2e} > {TOLERANCE:e} at lambda = {}",
+                        c.max_residual, c.worst_lambda
+                    ));
+                }
+                if let (Some(want), true) = (uz_ref, normal) {
+                    let got = uz1.unwrap_or(f64::NAN);
+                    if !((got - want).abs() <= UZ_A_TOLERANCE) {
+                        problems.push(format!(
+                            "uz_A(1) = {got:.7} m differs from the canonical {want} m by more than {UZ_A_TOLERANCE:e} m"
+                        ));
+                    }
+                }
+                let verdict = match (problems.is_empty(), normal) {
+                    (true, true) => Verdict::Met,
+                    (true, false) if run.stop.message.is_some() => Verdict::Diagnosed,
+                    _ => Verdict::Failed,
+                };
+                let mut message = run.stop.message.clone().unwrap_or_default();
+                if !problems.is_empty() {
+                    if !message.is_empty() {
+                        message += "; ";
+                    }
+                    message += &problems.join("; ");
+                }
+                StressCase {
+                    scene,
+                    axis,
+                    value,
+                    verdict,
+                    stop: run.stop.reason.clone(),
+                    message,
+                    residual: c.max_residual,
+                    steps: run.steps,
+                    wall_s: run.wall_s,
+                    detail: format!(
+                        "uz_A(1) = {}{}; max residual at lambda = {} over {} grid points; {}",
+                        uz1.map_or("not reached".into(), |u| format!("{u:.7} m")),
+                        uz_ref.map_or(String::new(), |u| format!(" (canonical {u} m)")),
+                        c.worst_lambda,
+                        c.points,
+                        if run.far_nodes_skipped {
+                            format!(
+                                "far candidates skipped (pull <= {:.1e} N)",
+                                run.skipped_pull_bound
+                            )
+                        } else {
+                            "every candidate active".into()
+                        }
+                    ),
                 }
             }
         })
@@ -165,12 +337,29 @@ pub fn markdown(cases: &[StressCase]) -> String {
                     Verdict::Failed => "**FAILED**",
                 };
                 format!(
-                    "{:e}: {v} ({}, {}, {:.0e})",
+                    "{:e}: {v} ({}, {}, {:.1e})",
                     c.value, c.stop, c.steps, c.residual
                 )
             })
             .collect();
         s += &format!("| {scene} | {axis} | {} |\n", cells.join("; "));
+    }
+    let notes: Vec<&StressCase> = cases
+        .iter()
+        .filter(|c| c.verdict != Verdict::Met || !c.detail.is_empty())
+        .collect();
+    if !notes.is_empty() {
+        s += "\n";
+    }
+    for c in notes {
+        s += &format!("- {} {} = {:e}: {:?}", c.scene, c.axis, c.value, c.verdict);
+        if !c.message.is_empty() {
+            s += &format!(": {}", c.message);
+        }
+        if !c.detail.is_empty() {
+            s += &format!(" ({})", c.detail);
+        }
+        s += "\n";
     }
     s
 }

@@ -1,0 +1,432 @@
+//! The regularization audit of the plate-cylinder scene: how much eta and K
+//! (eq. 3) bend uz_A and the total contact force, and what they cost.
+//!
+//! Each of eta and K is swept alone around the scene's values (runs in
+//! parallel). For every run: uz_A and rn_total at lambda = 1, their deviation
+//! from the least regularized run of the sweep (smallest eta, largest K),
+//! the deviation of the whole uz_A trajectory on the lambda grid, the checks
+//! of [`super::shell_check`] (full residual with every candidate active,
+//! vertical equilibrium at lambda = 1) and the cost. omega and zeta are
+//! friction regularizations: the shell is frictionless, they are rejected.
+
+use super::audit::Sweeps;
+use super::pool;
+use super::shell_check::{ShellCheck, check, with_grid_snapshots};
+use crate::error::{Error, Result};
+use crate::model::plate_cylinder::{RunReport, run_loaded};
+use crate::output::create_dir;
+use crate::output::plot::{Curve, Panel, draw};
+use crate::scene::shell::ShellScene;
+use std::path::Path;
+
+/// One audited plate-cylinder run.
+#[derive(Clone, Debug)]
+pub struct ShellAuditRow {
+    pub parameter: &'static str,
+    pub value: f64,
+    pub stop: String,
+    pub lambda_stop: f64,
+    /// Diagnosis of a stop other than the end.
+    pub message: Option<String>,
+    /// uz_A at lambda = 1 (NaN if not reached), m.
+    pub uz_a: f64,
+    /// |uz_A - uz_A,ref| / |uz_A,ref| at lambda = 1.
+    pub uz_a_deviation: f64,
+    /// rn_total at lambda = 1 (sum of the nodal reactions R), N.
+    pub rn_total: f64,
+    pub rn_total_deviation: f64,
+    /// max over the lambda grid (the part both runs reached) of
+    /// |uz_A - uz_A,ref| / max |uz_A,ref|.
+    pub trajectory_deviation: f64,
+    /// What the deviations are measured from.
+    pub reference: String,
+    pub check: ShellCheck,
+    /// False: eta too large to leave far candidates out, all were active.
+    pub far_nodes_skipped: bool,
+    pub skipped_pull_bound: f64,
+    pub steps: usize,
+    pub factorizations: usize,
+    pub wall_s: f64,
+}
+
+/// The smallest initial gap delta over the candidate nodes (m).
+fn smallest_gap(scene: &ShellScene) -> f64 {
+    scene
+        .obstacles
+        .iter()
+        .flat_map(|ob| {
+            scene
+                .contact_nodes
+                .iter()
+                .filter_map(|&n| ob.gap(&scene.mesh.nodes[n]).map(|g| g.h))
+        })
+        .filter(|h| *h > 0.0)
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// Applies one value of `eta` or `penalty` (K) to a copy of the scene, with
+/// the scene's own validation rules; omega and zeta are rejected (the shell
+/// is frictionless).
+pub fn with_parameter(scene: &ShellScene, parameter: &str, value: f64) -> Result<ShellScene> {
+    let bad = |problem: String| Error::Invalid {
+        file: scene.file.clone(),
+        key: format!("--{parameter}"),
+        problem,
+    };
+    if matches!(parameter, "omega" | "zeta") {
+        return Err(bad(format!(
+            "plate-cylinder contact is frictionless: {parameter} regularizes the friction law (eq. {}) and has nothing to act on; sweep --eta or --penalty",
+            if parameter == "omega" { 6 } else { 11 }
+        )));
+    }
+    if !(value.is_finite() && value > 0.0) {
+        return Err(bad(format!("values must be finite and > 0, got {value}")));
+    }
+    if scene.contact_nodes.is_empty() {
+        return Err(bad("the scene has no contact law ([contact])".into()));
+    }
+    let mut s = scene.clone();
+    match parameter {
+        "eta" => s.contact_eta = value,
+        "penalty" => s.contact_k = value,
+        _ => return Err(bad("unknown parameter".into())),
+    }
+    let delta = smallest_gap(&s);
+    if s.contact_eta >= s.contact_k * delta {
+        return Err(bad(format!(
+            "eta = {:e} must stay below K delta = {:e} (K = {:e} N/m, smallest initial gap delta = {delta:e} m)",
+            s.contact_eta,
+            s.contact_k * delta,
+            s.contact_k
+        )));
+    }
+    Ok(s)
+}
+
+/// Runs the eta and penalty sweeps (in parallel) and returns one row per run.
+pub fn audit(scene: &ShellScene, sweeps: &Sweeps) -> Result<Vec<ShellAuditRow>> {
+    for (name, values) in [("omega", &sweeps.omega), ("zeta", &sweeps.zeta)] {
+        if !values.is_empty() {
+            with_parameter(scene, name, values[0])?;
+        }
+    }
+    let mut jobs = vec![];
+    for (name, values) in [("eta", &sweeps.eta), ("penalty", &sweeps.penalty)] {
+        for &v in values {
+            jobs.push((
+                name,
+                v,
+                with_grid_snapshots(&with_parameter(scene, name, v)?),
+            ));
+        }
+    }
+    let runs = pool::map(&jobs, |(_, _, s)| {
+        let report = run_loaded(s, None, false)?;
+        let checked = check(s, &report)?;
+        Ok::<_, Error>((report, checked))
+    });
+    let mut rows = vec![];
+    for name in ["eta", "penalty"] {
+        let group: Vec<(f64, &RunReport, &ShellCheck)> = jobs
+            .iter()
+            .zip(&runs)
+            .filter(|((n, _, _), _)| *n == name)
+            .map(|((_, v, _), r)| match r {
+                Ok(Ok((run, c))) => Ok((*v, run, c)),
+                Ok(Err(e)) => Err(Error::Output(format!("audit run {name} = {v}: {e}"))),
+                Err(panic) => Err(Error::Output(format!(
+                    "audit run {name} = {v} panicked: {panic}"
+                ))),
+            })
+            .collect::<Result<_>>()?;
+        if group.is_empty() {
+            continue;
+        }
+        // The least regularized run: the smallest eta, the largest K.
+        let (ref_value, reference, _) = *group
+            .iter()
+            .min_by(|a, b| {
+                if name == "penalty" {
+                    b.0.total_cmp(&a.0)
+                } else {
+                    a.0.total_cmp(&b.0)
+                }
+            })
+            .expect("non-empty");
+        let at_end = |r: &RunReport, col: usize| {
+            r.history
+                .iter()
+                .find(|row| (row[0] - 1.0).abs() < 1e-9)
+                .map_or(f64::NAN, |row| row[col])
+        };
+        let (uz_ref, rn_ref) = (at_end(reference, 1), at_end(reference, 6));
+        let scale = reference
+            .history
+            .iter()
+            .map(|r| r[1].abs())
+            .fold(0.0, f64::max)
+            .max(f64::MIN_POSITIVE);
+        let label = if name == "penalty" { "K" } else { "eta" };
+        for (v, r, c) in group {
+            let (uz, rn) = (at_end(r, 1), at_end(r, 6));
+            let mut traj: f64 = 0.0;
+            for (a, b) in r.history.iter().zip(&reference.history) {
+                debug_assert!((a[0] - b[0]).abs() < 1e-9);
+                traj = traj.max((a[1] - b[1]).abs() / scale);
+            }
+            if r.history.is_empty() {
+                traj = f64::NAN;
+            }
+            rows.push(ShellAuditRow {
+                parameter: name,
+                value: v,
+                stop: r.stop.reason.clone(),
+                lambda_stop: r.stop.lambda.unwrap_or(f64::NAN),
+                message: r.stop.message.clone(),
+                uz_a: uz,
+                uz_a_deviation: (uz - uz_ref).abs() / uz_ref.abs(),
+                rn_total: rn,
+                rn_total_deviation: (rn - rn_ref).abs() / rn_ref.abs(),
+                trajectory_deviation: traj,
+                reference: format!("run with {label} = {ref_value:e}"),
+                check: c.clone(),
+                far_nodes_skipped: r.far_nodes_skipped,
+                skipped_pull_bound: r.skipped_pull_bound,
+                steps: r.steps,
+                factorizations: r.factorizations,
+                wall_s: r.wall_s,
+            });
+        }
+    }
+    Ok(rows)
+}
+
+const HEADER: [&str; 22] = [
+    "parameter",
+    "value",
+    "stop",
+    "lambda_stop",
+    "uz_A",
+    "uz_A_deviation",
+    "rn_total",
+    "rn_total_deviation",
+    "trajectory_deviation",
+    "contact_fx",
+    "contact_fz",
+    "clamp_fx",
+    "clamp_fz",
+    "balance",
+    "max_residual",
+    "residual_points",
+    "far_nodes_skipped",
+    "skipped_pull_bound",
+    "steps",
+    "factorizations",
+    "wall_s",
+    "message",
+];
+
+fn opt(v: Option<f64>) -> f64 {
+    v.unwrap_or(f64::NAN)
+}
+
+/// The table as Markdown.
+pub fn markdown(scene: &ShellScene, rows: &[ShellAuditRow]) -> String {
+    let mut s = format!(
+        "Regularization audit of `{}` (plate-cylinder; scene eta = {:e} N, K = {:e} N/m; deviations from the least regularized run of each sweep)\n\n",
+        scene.file.display(),
+        scene.contact_eta,
+        scene.contact_k
+    );
+    s += "| parameter | value | stop | lambda | uz_A(1) (m) | deviation | rn_total(1) (N) | deviation | trajectory deviation | contact Fx, Fz (N) | clamp Fx, Fz (N) | abs(P + C + S)/abs(P) | max abs(R)/abs(F) | far nodes | steps | factorizations | wall (s) | reference |\n";
+    s += "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+    for r in rows {
+        s += &format!(
+            "| {} | {:.0e} | {} | {:.4} | {:.6} | {:.2e} | {:.4} | {:.2e} | {:.2e} | {:.3}, {:.3} | {:.3}, {:.3} | {:.1e} | {:.1e} | {} | {} | {} | {:.1} | {} |\n",
+            if r.parameter == "penalty" { "K" } else { "eta" },
+            r.value,
+            r.stop,
+            r.lambda_stop,
+            r.uz_a,
+            r.uz_a_deviation,
+            r.rn_total,
+            r.rn_total_deviation,
+            r.trajectory_deviation,
+            opt(r.check.contact_force.map(|f| f[0])),
+            opt(r.check.contact_force.map(|f| f[2])),
+            opt(r.check.clamp_force.map(|f| f[0])),
+            opt(r.check.clamp_force.map(|f| f[2])),
+            opt(r.check.balance),
+            r.check.max_residual,
+            if r.far_nodes_skipped {
+                format!("skipped (pull <= {:.1e} N)", r.skipped_pull_bound)
+            } else {
+                "all active".into()
+            },
+            r.steps,
+            r.factorizations,
+            r.wall_s,
+            r.reference
+        );
+    }
+    for r in rows.iter().filter(|r| r.message.is_some()) {
+        s += &format!(
+            "\n{} = {:e}: {}",
+            r.parameter,
+            r.value,
+            r.message.as_deref().unwrap_or_default()
+        );
+    }
+    s
+}
+
+/// Writes audit.csv, audit.md and audit.svg into `dir`.
+pub fn write(scene: &ShellScene, rows: &[ShellAuditRow], dir: &Path) -> Result<()> {
+    create_dir(dir)?;
+    let io = |e: std::io::Error| Error::Io {
+        file: dir.to_path_buf(),
+        source: e,
+    };
+    let out = |e: csv::Error| Error::Output(e.to_string());
+    let mut w = csv::Writer::from_path(dir.join("audit.csv")).map_err(out)?;
+    w.write_record(HEADER).map_err(out)?;
+    for r in rows {
+        w.write_record([
+            r.parameter.to_string(),
+            format!("{:e}", r.value),
+            r.stop.clone(),
+            format!("{:e}", r.lambda_stop),
+            format!("{:.17e}", r.uz_a),
+            format!("{:e}", r.uz_a_deviation),
+            format!("{:.17e}", r.rn_total),
+            format!("{:e}", r.rn_total_deviation),
+            format!("{:e}", r.trajectory_deviation),
+            format!("{:e}", opt(r.check.contact_force.map(|f| f[0]))),
+            format!("{:e}", opt(r.check.contact_force.map(|f| f[2]))),
+            format!("{:e}", opt(r.check.clamp_force.map(|f| f[0]))),
+            format!("{:e}", opt(r.check.clamp_force.map(|f| f[2]))),
+            format!("{:e}", opt(r.check.balance)),
+            format!("{:e}", r.check.max_residual),
+            r.check.points.to_string(),
+            r.far_nodes_skipped.to_string(),
+            format!("{:e}", r.skipped_pull_bound),
+            r.steps.to_string(),
+            r.factorizations.to_string(),
+            format!("{:e}", r.wall_s),
+            r.message.clone().unwrap_or_default(),
+        ])
+        .map_err(out)?;
+    }
+    w.flush().map_err(io)?;
+    std::fs::write(dir.join("audit.md"), markdown(scene, rows)).map_err(io)?;
+    let mut panels = vec![];
+    let titles: Vec<(String, String, &str)> = ["eta", "penalty"]
+        .into_iter()
+        .filter(|p| rows.iter().any(|r| r.parameter == *p))
+        .map(|p| {
+            let (name, unit) = if p == "penalty" {
+                ("K", "K (N/m)")
+            } else {
+                ("eta", "eta (N)")
+            };
+            (
+                format!("plate-cylinder: deviation from the least regularized run, {name} swept"),
+                format!("plate-cylinder: cost, {name} swept"),
+                unit,
+            )
+        })
+        .collect();
+    for (p, (dev_title, cost_title, unit)) in ["eta", "penalty"]
+        .into_iter()
+        .filter(|p| rows.iter().any(|r| r.parameter == *p))
+        .zip(&titles)
+    {
+        let curve = |label: &'static str, f: &dyn Fn(&ShellAuditRow) -> f64| Curve {
+            label,
+            points: rows
+                .iter()
+                .filter(|r| r.parameter == p)
+                .map(|r| (r.value, f(r)))
+                .collect(),
+        };
+        panels.push(Panel {
+            title: dev_title,
+            x_label: unit,
+            y_label: "relative deviation",
+            curves: vec![
+                curve("uz_A(1)", &|r| r.uz_a_deviation),
+                curve("rn_total(1)", &|r| r.rn_total_deviation),
+                curve("uz_A trajectory (max over lambda)", &|r| {
+                    r.trajectory_deviation
+                }),
+            ],
+            log: (true, true),
+        });
+        panels.push(Panel {
+            title: cost_title,
+            x_label: unit,
+            y_label: "count",
+            curves: vec![
+                curve("steps", &|r| r.steps as f64),
+                curve("factorizations", &|r| r.factorizations as f64),
+            ],
+            log: (true, false),
+        });
+    }
+    draw(&dir.join("audit.svg"), &panels)?;
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn scene() -> ShellScene {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/plate-cylinder-coarse.toml");
+        crate::scene::shell::load(&path).expect("canonical scene")
+    }
+
+    fn invalid(r: Result<ShellScene>) -> (String, String) {
+        match r {
+            Err(Error::Invalid { key, problem, .. }) => (key, problem),
+            other => panic!("expected an invalid-input error, got {other:?}"),
+        }
+    }
+
+    #[test]
+    fn parameters_apply_and_bad_values_are_rejected_by_name() {
+        let sc = scene();
+        let s = with_parameter(&sc, "eta", 1e-3).unwrap();
+        assert_eq!((s.contact_eta, s.contact_k), (1e-3, sc.contact_k));
+        let s = with_parameter(&sc, "penalty", 1e6).unwrap();
+        assert_eq!((s.contact_eta, s.contact_k), (sc.contact_eta, 1e6));
+        for p in ["omega", "zeta"] {
+            let (key, problem) = invalid(with_parameter(&sc, p, 0.1));
+            assert_eq!(key, format!("--{p}"));
+            assert!(problem.contains("frictionless"), "{problem}");
+        }
+        for v in [-1e-6, 0.0, f64::NAN, f64::INFINITY] {
+            let (key, problem) = invalid(with_parameter(&sc, "eta", v));
+            assert_eq!(key, "--eta");
+            assert!(problem.contains("finite and > 0"), "{problem}");
+        }
+        // Smallest initial gap 1e-4 m: K = 1e-3 N/m gives K delta = 1e-7 N < eta.
+        let (key, problem) = invalid(with_parameter(&sc, "penalty", 1e-3));
+        assert_eq!(key, "--penalty");
+        assert!(problem.contains("below K delta"), "{problem}");
+        assert!((smallest_gap(&sc) - 1e-4).abs() < 1e-12);
+    }
+
+    #[test]
+    fn friction_sweeps_are_rejected_before_any_run() {
+        let sweeps = Sweeps {
+            omega: vec![0.1],
+            eta: vec![1e-6],
+            ..Default::default()
+        };
+        match audit(&scene(), &sweeps) {
+            Err(Error::Invalid { key, .. }) => assert_eq!(key, "--omega"),
+            other => panic!("expected --omega to be rejected, got {other:?}"),
+        }
+    }
+}
