@@ -126,6 +126,10 @@ pub struct Snapshot {
     pub director: Vec<[f64; 3]>,
     pub reaction: Vec<f64>,
     pub force: Vec<[f64; 3]>,
+    /// The state itself, 6 per node (v, w; zeros at clamped dofs): what the
+    /// fields above are computed from, for checks that re-evaluate the
+    /// equations (`study::shell_check`) without the rounding of x - x0.
+    pub state: Vec<f64>,
 }
 
 impl Snapshot {
@@ -454,6 +458,7 @@ pub fn run_loaded(scene: &ShellScene, out_dir: Option<&Path>, progress: bool) ->
                 .collect(),
             reaction: r,
             force: f.into_iter().map(arr).collect(),
+            state: full.to_vec(),
         }
     };
     let write_shell = |file: &str, full: &[f64], active: &[usize]| -> Result<()> {

@@ -404,7 +404,11 @@ pub fn skip_study(scene: &ShellScene, out_dir: &std::path::Path) -> Result<Vec<S
     let mut every = outputs.clone();
     every.vtk_every = 1;
     let runs: [(&'static str, &ShellScene, Option<std::path::PathBuf>); 4] = [
-        ("candidates within search_distance, no files", &lean, None),
+        (
+            "candidates within search_distance (where the skip bound allows), no files",
+            &lean,
+            None,
+        ),
         ("every candidate active, no files", &all_active, None),
         (
             "scene outputs (CSV, plot, VTK every vtk_every steps)",

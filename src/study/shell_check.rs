@@ -1,6 +1,6 @@
 //! Checks of a plate-cylinder run against the equations it claims to solve,
-//! from its written output only (the mid-surface snapshots: displacement and
-//! director per node):
+//! from its output only (the mid-surface snapshots: the state per node, and
+//! the contact forces the run reports):
 //! - the full residual |R(U, lambda)| / |F| over the free dofs, re-evaluated
 //!   on a freshly built model in which *every* candidate node carries the
 //!   contact law (eq. 3): the stated problem, not the truncated one the run
@@ -17,7 +17,7 @@
 //!   C_z differs from -P_z by 8% and C_x is about 29 N.
 
 use crate::error::Result;
-use crate::model::plate_cylinder::{RunReport, Snapshot, build_model, load_norm};
+use crate::model::plate_cylinder::{RunReport, build_model, load_norm};
 use crate::scene::shell::ShellScene;
 use crate::shell::ShellModel;
 
@@ -49,19 +49,6 @@ pub fn with_grid_snapshots(scene: &ShellScene) -> ShellScene {
     let n = (s.solver.lambda_end / s.lambda_step + 1e-9).floor() as usize;
     s.snapshots = (1..=n).map(|i| i as f64 * s.lambda_step).collect();
     s
-}
-
-/// The full 6-per-node state of a snapshot: displacement and director
-/// difference a3 - A3.
-fn state(scene: &ShellScene, snap: &Snapshot) -> Vec<f64> {
-    let mut full = vec![0.0; 6 * snap.displacement.len()];
-    for (i, (u, d)) in snap.displacement.iter().zip(&snap.director).enumerate() {
-        for k in 0..3 {
-            full[6 * i + k] = u[k];
-            full[6 * i + 3 + k] = d[k] - scene.directors[i][k];
-        }
-    }
-    full
 }
 
 /// |R(U, lambda)| / |F| over the free dofs, every candidate active.
@@ -105,8 +92,8 @@ pub fn check(scene: &ShellScene, report: &RunReport) -> Result<ShellCheck> {
         balance: None,
     };
     for snap in &report.snapshots {
-        let full = state(scene, snap);
-        let r = relative_residual(&mut model, &full, snap.lambda, f_norm);
+        let full = &snap.state;
+        let r = relative_residual(&mut model, full, snap.lambda, f_norm);
         out.points += 1;
         if !(r <= out.max_residual) {
             out.max_residual = r;
@@ -118,13 +105,13 @@ pub fn check(scene: &ShellScene, report: &RunReport) -> Result<ShellCheck> {
         .iter()
         .find(|s| (s.lambda - 1.0).abs() < 1e-9)
     {
-        let full = state(scene, end);
+        let full = &end.state;
         // Internal forces alone: no load, no contact.
         let mut bare = build_model(scene)?;
         bare.dead.iter_mut().for_each(|x| *x = 0.0);
         bare.pairs.clear();
-        bare.update_active(&full);
-        let f_int = bare.residual_full(&full, end.lambda)?;
+        bare.update_active(full);
+        let f_int = bare.residual_full(full, end.lambda)?;
         let mut p = [0.0; 3];
         let mut c = [0.0; 3];
         let mut clamp = [0.0; 3];
