@@ -46,7 +46,7 @@ fn every_run_meets_its_check_or_stops_with_a_diagnosis() {
 /// candidate carrying eq. 3; at order 40, where eta and K are the scene's,
 /// also uz_A(1) within 1e-6 m of the canonical 0.705805 m):
 /// - eta = 1e-2 N and 1 N: with far candidates left out both stalled (no
-///   convergence at lambda = 0.117 after 7464 factorizations; no stop within
+///   convergence at lambda = 0.117 after 7383 factorizations; no stop within
 ///   600 s); every candidate is now active above the skip bound;
 /// - order 40: the series terms pass 1e154 and their plain 2-norm
 ///   overflowed, the step length came out 0 (step collapse at lambda =

@@ -237,7 +237,7 @@ pub fn load_norm(m: &ShellModel) -> f64 {
 /// Otherwise every candidate carries its term: a node entering the active
 /// set would add its force to the residual at once, a jump the steps cannot
 /// follow (eta = 1e-2 N with the 0.05 m search distance stalled at lambda =
-/// 0.117 after 7464 factorizations), and the skipped forces would bend the
+/// 0.117 after 7383 factorizations), and the skipped forces would bend the
 /// answer unnoticed. On the canonical scenes (eta = 1e-6 N) the bound is
 /// 4.6e-5 N (0.1 m mesh) to 1.5e-4 N (0.025 m) against residual_tol |F| =
 /// 1.7e-5 N: every candidate is active (same uz_A(1) to 1e-6 m and the same
