@@ -294,6 +294,14 @@ fn series_step<P: ContinuationProblem>(
     let terms = stack_terms(&us, &ls);
     let n1 = norm(&terms[1]);
     let nn = norm(&terms[n_ord]);
+    if !(n1.is_finite() && nn.is_finite()) {
+        return Err(Error::NonFinite {
+            step: index,
+            param: "lambda",
+            at: lambda0,
+            what: format!("series terms (|U_1| = {n1:e}, |U_{n_ord}| = {nn:e})"),
+        });
+    }
     let cap = 1e15f64.powf(1.0 / n_ord as f64);
     let a_poly = if nn > 0.0 {
         (cfg.eps * n1 / nn)
