@@ -446,14 +446,15 @@ fn end_point<P: ContinuationProblem>(
         }
         let t = Instant::now();
         let neg: Vec<f64> = r.iter().map(|x| -x).collect();
-        let (ub, ut_c, den) = match &current {
-            None => (fact.solve(&neg), ut.to_vec(), denom),
-            Some((f, ut_c, den)) => (f.solve(&neg), ut_c.clone(), *den),
+        let (f, ut_c, den): (&Factorization, &[f64], f64) = match &current {
+            None => (fact, ut, denom),
+            Some((f, ut_c, den)) => (f, ut_c, *den),
         };
+        let ub = f.solve(&neg);
         stats.solves += 1;
         charge(&mut stats.solve_s, t);
         let dl = -dot(&ub, &step.u[1]) / den;
-        for ((x, b), t) in u_end.iter_mut().zip(&ub).zip(&ut_c) {
+        for ((x, b), t) in u_end.iter_mut().zip(&ub).zip(ut_c) {
             *x += b + dl * t;
         }
         l_end += dl;

@@ -136,6 +136,25 @@ pub struct BenchRow {
     pub stop: String,
 }
 
+impl BenchRow {
+    /// A setting that did not complete: no error or time, its stop reason.
+    pub fn failed(case: &str, method: String, setting: String, stop: String) -> Self {
+        Self {
+            case: case.into(),
+            method,
+            setting,
+            error: f64::NAN,
+            wall_s: f64::NAN,
+            wall_min_s: f64::NAN,
+            steps: 0,
+            factorizations: 0,
+            solves: 0,
+            breakdown: [f64::NAN; 4],
+            stop,
+        }
+    }
+}
+
 /// max over rows (up to `t_max`) and columns of |y - y_ref| / max|y_ref|.
 pub fn error(sol: &Solution, reference: &Solution, t_max: f64) -> f64 {
     let mut worst: f64 = 0.0;
@@ -192,19 +211,12 @@ pub fn work_precision(
                 }
                 Err(e) => {
                     last = None;
-                    rows.push(BenchRow {
-                        case: case.into(),
-                        method: m.label(),
-                        setting: m.setting(),
-                        error: f64::NAN,
-                        wall_s: f64::NAN,
-                        wall_min_s: f64::NAN,
-                        steps: 0,
-                        factorizations: 0,
-                        solves: 0,
-                        breakdown: [f64::NAN; 4],
-                        stop: e.kind().into(),
-                    });
+                    rows.push(BenchRow::failed(
+                        case,
+                        m.label(),
+                        m.setting(),
+                        e.kind().into(),
+                    ));
                     break;
                 }
             }

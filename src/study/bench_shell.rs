@@ -301,19 +301,7 @@ pub fn work_precision(
                     stop: r.stop.reason.clone(),
                 }
             }
-            Err(stop) => BenchRow {
-                case: case.into(),
-                method: m.label(),
-                setting: m.setting(),
-                error: f64::NAN,
-                wall_s: f64::NAN,
-                wall_min_s: f64::NAN,
-                steps: 0,
-                factorizations: 0,
-                solves: 0,
-                breakdown: [f64::NAN; 4],
-                stop,
-            },
+            Err(stop) => BenchRow::failed(case, m.label(), m.setting(), stop),
         };
         progress(m, &row);
         rows.push(row);
