@@ -62,6 +62,8 @@ pub enum Error {
     },
     #[error("{0}")]
     Output(String),
+    #[error("lambda = {lambda:.9e}: interrupted (Ctrl-C or SIGTERM)")]
+    Interrupted { lambda: f64 },
     #[error(
         "{param} = {at:.9e}: contact node {node} came to {gap:.3e} m of obstacle {obstacle} within one step while outside the search distance {distance:.3e} m (increase contact.search_distance)"
     )]
@@ -90,6 +92,7 @@ impl Error {
             Error::StepCollapse { .. } => "step_collapse",
             Error::Output(_) => "output",
             Error::ContactMissed { .. } => "contact_missed",
+            Error::Interrupted { .. } => "interrupted",
         }
     }
 

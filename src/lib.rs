@@ -19,10 +19,13 @@
 
 pub mod contact;
 pub mod error;
+pub mod fe;
 pub mod linalg;
 pub mod mesh;
+mod mesh_shim;
 pub mod model;
 pub mod output;
+pub mod run;
 #[cfg(feature = "reference")]
 pub mod reference;
 pub mod scene;

@@ -20,10 +20,17 @@ struct Cli {
 #[derive(Subcommand)]
 enum Command {
     /// Solve a scene and write history.csv, steps.csv, summary.json and a plot into DIR.
+    /// Ctrl-C or SIGTERM stops a shell run at the next step end with consistent
+    /// files; `anm run --resume DIR` continues it.
     Run {
-        scene: PathBuf,
-        #[arg(short, long, value_name = "DIR")]
-        out: PathBuf,
+        /// The scene file (not with --resume).
+        #[arg(required_unless_present = "resume")]
+        scene: Option<PathBuf>,
+        #[arg(short, long, value_name = "DIR", required_unless_present = "resume")]
+        out: Option<PathBuf>,
+        /// Continue the interrupted shell run in DIR from its checkpoint.json.
+        #[arg(long, value_name = "DIR", conflicts_with_all = ["scene", "out"])]
+        resume: Option<PathBuf>,
         /// No progress bar.
         #[arg(long)]
         quiet: bool,
@@ -153,9 +160,9 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
     match cli.command {
         Command::Check { scene } => {
             let (kind, _) = load(&scene)?;
-            if kind == Kind::PlateCylinder {
+            if kind == Kind::Shell {
                 let sc = anm::scene::shell::load(&scene)?;
-                anm::model::plate_cylinder::build_model(&sc)?;
+                anm::run::shell::check_factorizes(&sc)?;
             }
             println!("{}: valid `{}` scene", scene.display(), kind.name());
             Ok(ExitCode::SUCCESS)
@@ -423,32 +430,27 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
                 ExitCode::SUCCESS
             })
         }
-        Command::Run { scene, out, quiet } => {
+        Command::Run {
+            scene,
+            out,
+            resume,
+            quiet,
+        } => {
+            anm::run::interrupt::install();
+            if let Some(dir) = resume {
+                let report = anm::run::shell::resume(&dir, !quiet)
+                    .with_context(|| format!("resuming the run in {}", dir.display()))?;
+                return Ok(shell_summary(&report, &dir));
+            }
+            let (Some(scene), Some(out)) = (scene, out) else {
+                anyhow::bail!("`anm run` needs SCENE and -o DIR (or --resume DIR)");
+            };
             let (kind, friction) = load(&scene)?;
             match kind {
-                Kind::PlateCylinder => {
-                    let report = anm::model::plate_cylinder::run_scene(&scene, &out, !quiet)
+                Kind::Shell => {
+                    let report = anm::run::run_scene(&scene, &out, !quiet)
                         .with_context(|| format!("running {}", scene.display()))?;
-                    println!(
-                        "{}: stop = {} at lambda = {:.6}; {} dofs, {} steps, {} factorizations, {} solves, {:.3} s; uz_A = {:.6} m; outputs in {}",
-                        scene.display(),
-                        report.stop.reason,
-                        report.stop.lambda.unwrap_or(f64::NAN),
-                        report.dofs,
-                        report.steps,
-                        report.factorizations,
-                        report.solves,
-                        report.wall_s,
-                        report.uz_a_end,
-                        out.display()
-                    );
-                    if let Some(m) = &report.stop.message {
-                        println!("  {m}");
-                    }
-                    Ok(match report.stop.reason.as_str() {
-                        "end" => ExitCode::SUCCESS,
-                        _ => ExitCode::from(2),
-                    })
+                    Ok(shell_summary(&report, &out))
                 }
                 _ => {
                     let sc = friction.expect("friction kinds parse into a friction scene");
@@ -566,7 +568,39 @@ fn load(
     let text = scene::read(path)?;
     let kind = scene::kind(path, &text)?;
     match kind {
-        Kind::PlateCylinder => Ok((kind, None)),
+        Kind::Shell => Ok((kind, None)),
         _ => Ok((kind, Some(scene::friction::load(path, &text, kind)?))),
+    }
+}
+
+/// Prints a shell run's summary line; exit code 0 at the end of the path, 2
+/// on a numerical stop, 130 when interrupted.
+fn shell_summary(report: &anm::run::RunReport, out: &std::path::Path) -> ExitCode {
+    let ends: Vec<String> = report
+        .end
+        .iter()
+        .filter(|(k, _)| *k != "lambda")
+        .map(|(k, v)| format!("{k} = {v:.6e}"))
+        .collect();
+    println!(
+        "{}: stop = {} at lambda = {:.6}; {} dofs, {} steps, {} factorizations, {} solves, {:.3} s; {}; outputs in {}",
+        report.scene,
+        report.stop.reason,
+        report.stop.lambda.unwrap_or(f64::NAN),
+        report.dofs,
+        report.steps,
+        report.factorizations,
+        report.solves,
+        report.wall_s,
+        ends.join(", "),
+        out.display()
+    );
+    if let Some(m) = &report.stop.message {
+        println!("  {m}");
+    }
+    match report.stop.reason.as_str() {
+        "end" => ExitCode::SUCCESS,
+        "interrupted" => ExitCode::from(130),
+        _ => ExitCode::from(2),
     }
 }

@@ -16,7 +16,7 @@
 //! (order 15, eps 1e-8, no Padé, 2 shared cores.) The 0.05 m mesh is within
 //! 0.4% of the 0.025 m one at every lambda (0.02% at lambda = 1).
 
-use anm::model::plate_cylinder::{run_loaded, run_scene};
+use anm::run::{run_loaded, run_scene};
 use anm::scene::shell::load;
 use std::path::Path;
 
@@ -51,7 +51,7 @@ fn plate_cylinder_mesh_convergence() {
         );
         rows.push((
             mesh,
-            lams.map(|l| r.uz_at(l).unwrap_or(f64::NAN)),
+            lams.map(|l| r.value_at("uz_A", l).unwrap_or(f64::NAN)),
             r.steps,
             r.factorizations,
             r.wall_s,
@@ -115,7 +115,8 @@ fn plate_cylinder_scene_runs_and_writes_outputs() {
         "history.csv",
         "summary.json",
         "plot.svg",
-        "plate-cylinder.pvd",
+        "shell.pvd",
+        "steps.csv",
         "obstacle_0.vtu",
         "shell_0000.vtu",
         "shell_final.vtu",
@@ -132,6 +133,7 @@ fn plate_cylinder_scene_runs_and_writes_outputs() {
             w[1][0]
         );
     }
-    assert!((r.history[100][1] - r.uz_a_end).abs() < 1e-9);
+    assert_eq!(r.columns[1], "uz_A");
+    assert!((r.history[100][1] - r.end["uz_A"]).abs() < 1e-15);
     let _ = (run_loaded, load);
 }

@@ -19,7 +19,7 @@
 #![cfg(feature = "reference")]
 
 mod common;
-use anm::model::plate_cylinder::{RunReport, Snapshot, run_loaded};
+use anm::run::{RunReport, Snapshot, run_loaded};
 use std::path::Path;
 use std::sync::OnceLock;
 

@@ -65,7 +65,7 @@ fn tip_path(m: &mut ShellModel, tip: &[usize], targets: &[f64]) -> (Vec<Vec3>, u
     assert!(res.error.is_none() && res.stop == "end", "{:?}", res.error);
     let mut out = vec![];
     for &lt in targets {
-        let (u, _) = steps
+        let (u, lambda) = steps
             .iter()
             .find_map(|s| {
                 if (s.lambda_end - lt).abs() < 1e-12 {
@@ -75,7 +75,7 @@ fn tip_path(m: &mut ShellModel, tip: &[usize], targets: &[f64]) -> (Vec<Vec3>, u
                 }
             })
             .expect("target lambda on the path");
-        let full = m.expand(&u);
+        let full = m.expand(&u, lambda);
         let mut d = Vec3::zeros();
         for &n in tip {
             d += Vec3::new(full[6 * n], full[6 * n + 1], full[6 * n + 2]) / tip.len() as f64;

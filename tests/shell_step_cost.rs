@@ -12,7 +12,7 @@
 //! rarely leaves undisturbed for their whole length (parts is the figure).
 
 use anm::linalg::{Factorization, SparseLu, dot};
-use anm::model::plate_cylinder::build_model;
+use anm::run::build::build_model;
 use anm::scene::shell::load;
 use anm::series::ContinuationProblem;
 use anm::series::continuation::run;

@@ -3,10 +3,12 @@
 //! (gap and normal) and the contact candidate search.
 
 pub mod friction;
+pub mod motion;
 pub mod normal;
 pub mod obstacle;
 pub mod search;
 
 pub use friction::FrictionLaw;
+pub use motion::Motion;
 pub use normal::NormalLaw;
 pub use obstacle::Obstacle;

@@ -2,4 +2,3 @@
 
 pub mod friction;
 pub mod friction_run;
-pub mod plate_cylinder;

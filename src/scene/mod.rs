@@ -15,7 +15,7 @@ pub enum Kind {
     Friction1d,
     FrictionPlane,
     FrictionRoller,
-    PlateCylinder,
+    Shell,
 }
 
 impl Kind {
@@ -23,7 +23,7 @@ impl Kind {
         ("friction-1d", Kind::Friction1d),
         ("friction-plane", Kind::FrictionPlane),
         ("friction-roller", Kind::FrictionRoller),
-        ("plate-cylinder", Kind::PlateCylinder),
+        ("shell", Kind::Shell),
     ];
 
     pub fn name(self) -> &'static str {

@@ -1,49 +1,23 @@
-//! Shell scenes (`kind = "plate-cylinder"`): a gmsh mesh, a 3D shell
-//! material and thickness, clamped groups, dead point loads, rigid
-//! obstacles with the regularized contact law (eq. 3), solver and output
-//! settings. Every parameter is settable; validation errors name the file and
-//! the key (`table.key`, `load[i].point`).
-//!
-//! ```toml
-//! [scene]
-//! kind = "plate-cylinder"
-//! [mesh]
-//! file = "../meshes/plate-cylinder.msh"   # relative to the scene file
-//! clamp = ["clamp"]                       # physical groups, all 6 dofs fixed
-//! contact = "strip"                       # physical group of candidate nodes
-//! [material]
-//! young = 200e9
-//! poisson = 0.3
-//! [shell]
-//! thickness = 0.8e-3
-//! [[obstacle]]
-//! type = "cylinder"                       # or "plane" (point, normal)
-//! centre = [1.0, 0.0, 0.5001]
-//! axis = [0.0, 1.0, 0.0]
-//! radius = 0.5
-//! [contact]
-//! k = 1e9
-//! eta = 1e-6
-//! search_distance = 0.05
-//! [[load]]
-//! point = [2.0, 0.0, 0.0]                 # or group = "load_A"
-//! force = [0.0, 0.0, 10.0]                # per node, times lambda
-//! [solver]
-//! order = 15
-//! eps = 1e-8
-//! ...
-//! [output]
-//! lambda_step = 0.01
-//! ...
-//! ```
+//! Shell scenes (`kind = "shell"`): any shell problem as data. A mesh (gmsh
+//! file or built-in structured mesh), material and thickness, essential
+//! conditions per group and component (`[[fix]]`, with values proportional to
+//! lambda), loads (`[[load]]`: nodal forces and moments, line loads on edges,
+//! tractions and dead or follower pressures on surfaces), rigid obstacles with
+//! a motion (`[[obstacle]]`), the regularized contact law (eq. 3), named
+//! outputs (`[[probe]]`), solver and output settings. Every key, its unit,
+//! default and range: docs/scenes.md. Validation errors name the file and
+//! the key (`table.key`, `load[2].pressure`).
 
-use super::{Checker, Kind, parse, read, relative_to};
-use crate::contact::Obstacle;
+use super::{Checker, parse, read, relative_to};
+use crate::contact::{Motion, Obstacle};
 use crate::error::Result;
-use crate::mesh::{Mesh, Vec3, gmsh};
+use crate::fe::dof::{Component, Dof};
+use crate::mesh::{Mesh, Vec3, gmsh, structured};
 use crate::series::ContinuationConfig;
+use crate::series::newton::{Control, NewtonConfig};
 use crate::shell::Material;
 use serde::Deserialize;
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 #[derive(Deserialize)]
@@ -51,13 +25,19 @@ use std::path::{Path, PathBuf};
 struct Raw {
     scene: RawScene,
     mesh: RawMesh,
+    #[serde(default)]
+    group: Vec<RawGroup>,
     material: RawMaterial,
     shell: RawShell,
+    #[serde(default)]
+    fix: Vec<RawFix>,
+    #[serde(default)]
+    load: Vec<RawLoad>,
     #[serde(default)]
     obstacle: Vec<RawObstacle>,
     contact: Option<RawContact>,
     #[serde(default)]
-    load: Vec<RawLoad>,
+    probe: Vec<RawProbe>,
     solver: RawSolver,
     output: RawOutput,
 }
@@ -66,23 +46,32 @@ struct Raw {
 #[serde(deny_unknown_fields)]
 struct RawScene {
     kind: String,
-    #[serde(default)]
     description: Option<String>,
 }
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct RawMesh {
-    file: String,
-    clamp: Vec<String>,
-    contact: Option<String>,
-    /// Tolerance (m) to match load points and probes with nodes.
-    #[serde(default = "default_node_tol")]
-    node_tolerance: f64,
+    file: Option<String>,
+    #[serde(rename = "type")]
+    kind: Option<String>,
+    x: Option<[f64; 2]>,
+    y: Option<[f64; 2]>,
+    radius: Option<toml::Value>,
+    angle: Option<[f64; 2]>,
+    longitude: Option<[f64; 2]>,
+    latitude: Option<[f64; 2]>,
+    divisions: Option<[usize; 2]>,
+    node_tolerance: Option<f64>,
 }
 
-fn default_node_tol() -> f64 {
-    1e-9
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawGroup {
+    name: String,
+    /// [[xmin, ymin, zmin], [xmax, ymax, zmax]]
+    #[serde(rename = "box")]
+    bounds: [[f64; 3]; 2],
 }
 
 #[derive(Deserialize)]
@@ -100,22 +89,15 @@ struct RawShell {
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
-struct RawObstacle {
-    #[serde(rename = "type")]
-    kind: String,
-    centre: Option<[f64; 3]>,
-    axis: Option<[f64; 3]>,
-    radius: Option<f64>,
+struct RawFix {
+    group: Option<String>,
     point: Option<[f64; 3]>,
-    normal: Option<[f64; 3]>,
-}
-
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-struct RawContact {
-    k: f64,
-    eta: f64,
-    search_distance: f64,
+    dofs: Option<Vec<String>>,
+    /// Per unit lambda, one per entry of `dofs`.
+    value: Option<Vec<f64>>,
+    clamp: Option<bool>,
+    symmetry: Option<String>,
+    simply_supported: Option<bool>,
 }
 
 #[derive(Deserialize)]
@@ -123,86 +105,184 @@ struct RawContact {
 struct RawLoad {
     point: Option<[f64; 3]>,
     group: Option<String>,
-    force: [f64; 3],
+    edge: Option<String>,
+    surface: Option<String>,
+    force: Option<[f64; 3]>,
+    moment: Option<[f64; 3]>,
+    line_force: Option<[f64; 3]>,
+    traction: Option<[f64; 3]>,
+    pressure: Option<f64>,
+    follower: Option<bool>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawObstacle {
+    name: Option<String>,
+    #[serde(rename = "type")]
+    kind: String,
+    centre: Option<[f64; 3]>,
+    axis: Option<[f64; 3]>,
+    radius: Option<f64>,
+    point: Option<[f64; 3]>,
+    normal: Option<[f64; 3]>,
+    motion: Option<RawMotion>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawMotion {
+    #[serde(rename = "type")]
+    kind: String,
+    velocity: Option<[f64; 3]>,
+    omega: Option<f64>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawContact {
+    group: String,
+    k: f64,
+    eta: f64,
+    search_distance: f64,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawProbe {
+    name: String,
+    quantity: String,
+    point: Option<[f64; 3]>,
+    group: Option<String>,
+    obstacle: Option<String>,
 }
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct RawSolver {
-    order: usize,
-    eps: f64,
-    #[serde(default)]
-    pade: bool,
-    lambda_end: f64,
-    #[serde(default = "default_max_steps")]
-    max_steps: usize,
-    #[serde(default = "default_residual_tol")]
-    residual_tol: f64,
-    #[serde(default = "default_true")]
-    correct: bool,
-    #[serde(default = "default_max_corr")]
-    max_corrections: usize,
-    /// "anm" (default) or "newton" (the Newton-Raphson baseline).
     method: Option<String>,
-    /// Newton: "arclength" (default) or "load" control.
+    order: Option<usize>,
+    eps: Option<f64>,
+    pade: Option<bool>,
+    lambda_end: f64,
+    max_steps: Option<usize>,
+    residual_tol: Option<f64>,
+    correct: Option<bool>,
+    max_corrections: Option<usize>,
+    length_scale: Option<f64>,
     newton_control: Option<String>,
-    /// Newton: first increment (of the arclength, or of lambda).
     newton_step: Option<f64>,
-    /// Newton: largest increment.
     newton_max_step: Option<f64>,
-    /// Newton: convergence tolerance on |R| / |R_lambda|.
     newton_tol: Option<f64>,
-}
-
-fn default_max_steps() -> usize {
-    20_000
-}
-fn default_residual_tol() -> f64 {
-    1e-6
-}
-fn default_true() -> bool {
-    true
-}
-fn default_max_corr() -> usize {
-    10
 }
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct RawOutput {
-    /// Uniform lambda grid step of history.csv.
     lambda_step: f64,
-    /// Probe point A (uz_A, ux_A).
-    probe: [f64; 3],
-    /// x of the node rows B, C, D (rn_B, rn_C, rn_D).
-    contact_rows: [f64; 3],
-    /// VTK of the deformed shell every `vtk_every` steps (0: none) and at the end.
-    #[serde(default = "default_vtk_every")]
-    vtk_every: usize,
-    #[serde(default = "default_true")]
-    plot: bool,
-    /// Lambda values (on the grid) where the full mid-surface fields are
-    /// kept: HDF5 output and the comparison with the dolfinx reference.
-    #[serde(default = "default_snapshots")]
-    snapshots: Vec<f64>,
-    /// Write fields.h5 (needs a build with the `hdf5` feature).
-    #[serde(default)]
-    hdf5: bool,
+    vtk_every: Option<usize>,
+    plot: Option<bool>,
+    snapshots: Option<Vec<f64>>,
+    hdf5: Option<bool>,
 }
 
-fn default_snapshots() -> Vec<f64> {
-    vec![0.05, 0.1, 0.2, 0.5, 1.0]
-}
-
-fn default_vtk_every() -> usize {
-    10
-}
-
-/// A point load: node and force per unit lambda.
+/// A load, scaled by lambda.
 #[derive(Clone, Debug)]
-pub struct PointLoad {
-    pub node: usize,
-    pub force: Vec3,
+pub enum Load {
+    /// Force per node (N), dead.
+    Nodal { nodes: Vec<usize>, force: Vec3 },
+    /// Couple per node (N m) about a fixed axis, applied as the director
+    /// force m × a3 (shell::model).
+    Moment { nodes: Vec<usize>, moment: Vec3 },
+    /// Force per unit length (N/m) on edges, dead, lumped consistently.
+    Line { edges: Vec<[usize; 2]>, force: Vec3 },
+    /// Force per unit reference area (Pa), dead.
+    Traction { quads: Vec<usize>, traction: Vec3 },
+    /// Pressure (Pa) along the element normal: the reference one (dead) or
+    /// the current one (follower).
+    Pressure {
+        quads: Vec<usize>,
+        pressure: f64,
+        follower: bool,
+    },
+}
+
+/// A rigid obstacle of the scene.
+#[derive(Clone, Debug)]
+pub struct ObstacleSpec {
+    pub name: String,
+    pub shape: Obstacle,
+    pub motion: Motion,
+}
+
+/// Contact candidates and the law of eq. (3).
+#[derive(Clone, Debug)]
+pub struct ContactSpec {
+    pub nodes: Vec<usize>,
+    pub k: f64,
+    pub eta: f64,
+    pub search_distance: f64,
+}
+
+/// What a probe measures.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Quantity {
+    /// A dof component (ux..wz), averaged over the nodes.
+    Dof {
+        nodes: Vec<usize>,
+        component: Component,
+    },
+    /// Current position component (axis 0, 1, 2), averaged over the nodes.
+    Position { nodes: Vec<usize>, axis: usize },
+    /// Resultant of the support reactions of fixed nodes along an axis.
+    Reaction { nodes: Vec<usize>, axis: usize },
+    /// Sum of the normal contact reactions R (N) of the nodes (all contact
+    /// nodes if None) against one obstacle (all if None).
+    ContactNormal {
+        nodes: Option<Vec<usize>>,
+        obstacle: Option<usize>,
+    },
+    /// Resultant of the contact forces R n along an axis.
+    ContactForce {
+        nodes: Option<Vec<usize>>,
+        obstacle: Option<usize>,
+        axis: usize,
+    },
+    /// Smallest gap of a contact node (m).
+    MinGap { obstacle: Option<usize> },
+    /// Number of contact nodes at or past the obstacle surface (gap <= 0).
+    Contacts { obstacle: Option<usize> },
+    Lambda,
+    /// Scaled arclength a summed along the path (dimensionless).
+    Arclength,
+}
+
+/// A named output: one history.csv column.
+#[derive(Clone, Debug)]
+pub struct Probe {
+    pub name: String,
+    pub quantity: Quantity,
+    /// Unit of the column (for plots and docs).
+    pub unit: &'static str,
+}
+
+/// How the path is followed.
+#[derive(Clone, Debug)]
+pub enum Method {
+    Anm,
+    Newton(NewtonConfig),
+    /// One solve with the tangent at rest: u = lambda K0^-1 F.
+    Linear,
+}
+
+/// Output settings.
+#[derive(Clone, Debug)]
+pub struct OutputSpec {
+    pub lambda_step: f64,
+    pub vtk_every: usize,
+    pub plot: bool,
+    pub snapshots: Vec<f64>,
+    pub hdf5: bool,
 }
 
 /// A validated shell scene.
@@ -214,39 +294,129 @@ pub struct ShellScene {
     pub directors: Vec<Vec3>,
     pub material: Material,
     pub thickness: f64,
-    pub clamped: Vec<usize>,
-    pub obstacles: Vec<Obstacle>,
-    pub contact_nodes: Vec<usize>,
-    pub contact_k: f64,
-    pub contact_eta: f64,
-    pub search_distance: f64,
-    pub loads: Vec<PointLoad>,
+    /// Fixed dofs and their values per unit lambda.
+    pub fixed: BTreeMap<Dof, f64>,
+    pub loads: Vec<Load>,
+    pub obstacles: Vec<ObstacleSpec>,
+    pub contact: Option<ContactSpec>,
+    pub probes: Vec<Probe>,
+    pub method: Method,
     pub solver: ContinuationConfig,
-    pub lambda_step: f64,
-    pub probe: usize,
-    pub rows: [Vec<usize>; 3],
-    pub row_x: [f64; 3],
-    pub vtk_every: usize,
-    pub plot: bool,
-    /// The Newton-Raphson baseline instead of the ANM (`solver.method = "newton"`).
-    pub newton: Option<crate::series::newton::NewtonConfig>,
-    pub snapshots: Vec<f64>,
-    pub hdf5: bool,
+    /// Characteristic length of the step control (solver.length_scale).
+    pub length_scale: f64,
+    pub output: OutputSpec,
+}
+
+impl ShellScene {
+    /// The column of history.csv of a probe name (lambda is column 0).
+    pub fn column(&self, name: &str) -> Option<usize> {
+        self.probes.iter().position(|p| p.name == name).map(|i| i + 1)
+    }
+
+    /// The key output of the studies (audit, bench, stress): the first probe.
+    pub fn key_probe(&self) -> Option<&Probe> {
+        self.probes.first()
+    }
+
+    /// The contact output of the studies: the first `contact_rn` probe over
+    /// every contact node and obstacle (no point, group or obstacle).
+    pub fn total_contact_probe(&self) -> Option<&Probe> {
+        self.probes.iter().find(|p| {
+            p.quantity
+                == Quantity::ContactNormal {
+                    nodes: None,
+                    obstacle: None,
+                }
+        })
+    }
 }
 
 fn v3(a: [f64; 3]) -> Vec3 {
     Vec3::new(a[0], a[1], a[2])
 }
 
-/// Loads and validates a plate-cylinder (shell) scene.
+/// Scene validation with the mesh and its groups at hand.
+struct Ctx<'a> {
+    c: Checker<'a>,
+    mesh: &'a Mesh,
+    /// Scene-defined node groups (`[[group]]`).
+    extra: BTreeMap<String, Vec<usize>>,
+    tol: f64,
+}
+
+impl Ctx<'_> {
+    fn finite3(&self, key: &str, v: [f64; 3]) -> Result<Vec3> {
+        for x in v {
+            self.c.finite(key, x)?;
+        }
+        Ok(v3(v))
+    }
+
+    fn group(&self, name: &str, key: &str) -> Result<Vec<usize>> {
+        if let Some(v) = self.extra.get(name) {
+            return Ok(v.clone());
+        }
+        self.mesh
+            .group(name, self.c.file, key)
+            .map(|v| v.to_vec())
+            .map_err(|_| {
+                let mut known: Vec<String> = self.mesh.groups.keys().cloned().collect();
+                known.extend(self.extra.keys().cloned());
+                self.c.fail(
+                    key,
+                    format!(
+                        "unknown group `{name}` (mesh {} and [[group]] have: {})",
+                        self.mesh.file.display(),
+                        known.join(", ")
+                    ),
+                )
+            })
+    }
+
+    fn point(&self, p: [f64; 3], key: &str) -> Result<usize> {
+        let x = self.finite3(key, p)?;
+        self.mesh.node_at(&x, self.tol).ok_or_else(|| {
+            let near = self
+                .mesh
+                .nodes
+                .iter()
+                .map(|n| (n - x).norm())
+                .fold(f64::INFINITY, f64::min);
+            self.c.fail(
+                key,
+                format!(
+                    "({}, {}, {}) is not a node of {} (nearest node at {near:.3e}, tolerance mesh.node_tolerance = {:.3e})",
+                    p[0],
+                    p[1],
+                    p[2],
+                    self.mesh.file.display(),
+                    self.tol
+                ),
+            )
+        })
+    }
+
+    /// Nodes of exactly one of `point` or `group`.
+    fn nodes(&self, point: Option<[f64; 3]>, group: &Option<String>, key: &str) -> Result<Vec<usize>> {
+        match (point, group) {
+            (Some(p), None) => Ok(vec![self.point(p, &format!("{key}.point"))?]),
+            (None, Some(g)) => self.group(g, &format!("{key}.group")),
+            _ => Err(self
+                .c
+                .fail(key, "give exactly one of `point` or `group`")),
+        }
+    }
+}
+
+/// Loads and validates a shell scene.
 pub fn load(path: &Path) -> Result<ShellScene> {
     let text = read(path)?;
     let raw: Raw = parse(path, &text)?;
     let c = Checker { file: path };
-    if raw.scene.kind != Kind::PlateCylinder.name() {
+    if raw.scene.kind != "shell" {
         return Err(c.fail(
             "scene.kind",
-            format!("expected `plate-cylinder`, got `{}`", raw.scene.kind),
+            format!("expected `shell`, got `{}`", raw.scene.kind),
         ));
     }
     let young = c.positive("material.young", raw.material.young)?;
@@ -258,33 +428,471 @@ pub fn load(path: &Path) -> Result<ShellScene> {
         ));
     }
     let thickness = c.positive("shell.thickness", raw.shell.thickness)?;
-    let tol = c.positive("mesh.node_tolerance", raw.mesh.node_tolerance)?;
-    let mesh_path = relative_to(path, &raw.mesh.file);
-    let mesh = gmsh::read(&mesh_path)?;
+    let mesh = mesh(&c, path, &raw.mesh)?;
     let directors = mesh.directors()?;
-    let mut clamped = vec![];
-    for (i, g) in raw.mesh.clamp.iter().enumerate() {
-        clamped.extend_from_slice(mesh.group(g, path, &format!("mesh.clamp[{i}]"))?);
+    let size = mesh.size();
+    let tol = match raw.mesh.node_tolerance {
+        Some(t) => c.positive("mesh.node_tolerance", t)?,
+        None => 1e-9 * size,
+    };
+    let mut ctx = Ctx {
+        c: Checker { file: path },
+        mesh: &mesh,
+        extra: BTreeMap::new(),
+        tol,
+    };
+    for (i, g) in raw.group.iter().enumerate() {
+        let key = format!("group[{i}]");
+        if g.name.is_empty() || mesh.groups.contains_key(&g.name) || ctx.extra.contains_key(&g.name) {
+            return Err(c.fail(
+                &format!("{key}.name"),
+                format!("`{}` is empty or already a group name", g.name),
+            ));
+        }
+        let lo = ctx.finite3(&format!("{key}.box"), g.bounds[0])?;
+        let hi = ctx.finite3(&format!("{key}.box"), g.bounds[1])?;
+        let nodes: Vec<usize> = (0..mesh.nodes.len())
+            .filter(|&n| {
+                let x = mesh.nodes[n];
+                (0..3).all(|k| x[k] >= lo[k] - tol && x[k] <= hi[k] + tol)
+            })
+            .collect();
+        if nodes.is_empty() {
+            return Err(c.fail(
+                &format!("{key}.box"),
+                format!("no node of {} in the box {:?}", mesh.file.display(), g.bounds),
+            ));
+        }
+        ctx.extra.insert(g.name.clone(), nodes);
     }
-    if clamped.is_empty() {
+    let fixed = fixes(&ctx, &raw.fix)?;
+    let loads = loads(&ctx, &raw.load)?;
+    if loads.is_empty() && fixed.values().all(|v| *v == 0.0) {
         return Err(c.fail(
-            "mesh.clamp",
-            "no clamped node: the problem would be singular",
+            "load",
+            "missing: at least one [[load]] or a [[fix]] with a non-zero `value` (both are scaled by lambda)",
         ));
     }
-    let mut obstacles = vec![];
-    for (i, o) in raw.obstacle.iter().enumerate() {
-        let key = |k: &str| format!("obstacle[{i}].{k}");
-        let need = |v: Option<[f64; 3]>, k: &str| {
-            v.map(v3).ok_or_else(|| {
-                c.fail(
-                    &key(k),
-                    format!("missing: required by a `{}` obstacle", o.kind),
-                )
+    let obstacles = obstacles(&ctx, &raw.obstacle)?;
+    let contact = match &raw.contact {
+        Some(ct) => {
+            if obstacles.is_empty() {
+                return Err(c.fail("obstacle", "missing: [contact] needs at least one [[obstacle]]"));
+            }
+            Some(ContactSpec {
+                nodes: ctx.group(&ct.group, "contact.group")?,
+                k: c.positive("contact.k", ct.k)?,
+                eta: c.positive("contact.eta", ct.eta)?,
+                search_distance: c.positive("contact.search_distance", ct.search_distance)?,
             })
+        }
+        None => None,
+    };
+    let probes = probes(&ctx, &raw.probe, &fixed, &obstacles, contact.is_some())?;
+    let (method, solver, length_scale) = solver(&c, &raw.solver, size)?;
+    let o = &raw.output;
+    let lambda_step = c.positive("output.lambda_step", o.lambda_step)?;
+    let snapshots = o.snapshots.clone().unwrap_or_default();
+    for (k, &l) in snapshots.iter().enumerate() {
+        let on_grid = (l / lambda_step - (l / lambda_step).round()).abs() < 1e-9;
+        if !(l >= 0.0 && l.is_finite() && on_grid) {
+            return Err(c.fail(
+                &format!("output.snapshots[{k}]"),
+                format!("{l} is not a value of the lambda grid (multiples of output.lambda_step = {lambda_step})"),
+            ));
+        }
+    }
+    let hdf5 = o.hdf5.unwrap_or(false);
+    if hdf5 && !cfg!(feature = "hdf5") {
+        return Err(c.fail(
+            "output.hdf5",
+            "this build has no HDF5 support: rebuild with `--features hdf5`",
+        ));
+    }
+    ctx.extra.clear();
+    Ok(ShellScene {
+        file: path.to_path_buf(),
+        description: raw.scene.description,
+        directors,
+        material: Material { young, poisson },
+        thickness,
+        fixed,
+        loads,
+        obstacles,
+        contact,
+        probes,
+        method,
+        solver,
+        length_scale,
+        output: OutputSpec {
+            lambda_step,
+            vtk_every: o.vtk_every.unwrap_or(10),
+            plot: o.plot.unwrap_or(true),
+            snapshots,
+            hdf5,
+        },
+        mesh,
+    })
+}
+
+/// The mesh: a gmsh file or a built-in structured mesh.
+fn mesh(c: &Checker, path: &Path, m: &RawMesh) -> Result<Mesh> {
+    let deg = |key: &str, v: Option<[f64; 2]>| -> Result<(f64, f64)> {
+        let v = v.ok_or_else(|| c.fail(key, "missing: required by this mesh type"))?;
+        for x in v {
+            c.finite(key, x)?;
+        }
+        if v[0] == v[1] {
+            return Err(c.fail(key, format!("the range [{}, {}] is empty", v[0], v[1])));
+        }
+        Ok((v[0].to_radians(), v[1].to_radians()))
+    };
+    let range = |key: &str, v: Option<[f64; 2]>| -> Result<(f64, f64)> {
+        let v = v.ok_or_else(|| c.fail(key, "missing: required by this mesh type"))?;
+        for x in v {
+            c.finite(key, x)?;
+        }
+        if !(v[1] > v[0]) {
+            return Err(c.fail(key, format!("needs min < max, got [{}, {}]", v[0], v[1])));
+        }
+        Ok((v[0], v[1]))
+    };
+    let unused = |key: &str, present: bool, kind: &str| -> Result<()> {
+        if present {
+            Err(c.fail(key, format!("not used by a mesh of type `{kind}`; remove it")))
+        } else {
+            Ok(())
+        }
+    };
+    let divisions = || -> Result<(usize, usize)> {
+        let d = m
+            .divisions
+            .ok_or_else(|| c.fail("mesh.divisions", "missing: required by this mesh type"))?;
+        if d[0] == 0 || d[1] == 0 || d[0] * d[1] > 4_000_000 {
+            return Err(c.fail("mesh.divisions", format!("must be 1 ..= 2000 x 2000 elements, got {d:?}")));
+        }
+        Ok((d[0], d[1]))
+    };
+    let radius_scalar = || -> Result<f64> {
+        let r = m
+            .radius
+            .as_ref()
+            .ok_or_else(|| c.fail("mesh.radius", "missing: required by this mesh type"))?;
+        let r = r
+            .as_float()
+            .or_else(|| r.as_integer().map(|i| i as f64))
+            .ok_or_else(|| c.fail("mesh.radius", format!("expected a number, got {r}")))?;
+        c.positive("mesh.radius", r)
+    };
+    match (&m.file, &m.kind) {
+        (Some(f), None) => {
+            for (k, present) in [
+                ("mesh.x", m.x.is_some()),
+                ("mesh.y", m.y.is_some()),
+                ("mesh.radius", m.radius.is_some()),
+                ("mesh.angle", m.angle.is_some()),
+                ("mesh.longitude", m.longitude.is_some()),
+                ("mesh.latitude", m.latitude.is_some()),
+                ("mesh.divisions", m.divisions.is_some()),
+            ] {
+                unused(k, present, "file")?;
+            }
+            let file = relative_to(path, f);
+            gmsh::read(&file).map_err(|e| match e {
+                crate::Error::Io { source, .. } => c.fail(
+                    "mesh.file",
+                    format!("cannot read the mesh {}: {source}", file.display()),
+                ),
+                other => other,
+            })
+        }
+        (None, Some(kind)) => {
+            let kind = kind.as_str();
+            let mesh = match kind {
+                "rectangle" => {
+                    unused("mesh.radius", m.radius.is_some(), kind)?;
+                    unused("mesh.angle", m.angle.is_some(), kind)?;
+                    unused("mesh.longitude", m.longitude.is_some(), kind)?;
+                    unused("mesh.latitude", m.latitude.is_some(), kind)?;
+                    let (x0, x1) = range("mesh.x", m.x)?;
+                    let (y0, y1) = range("mesh.y", m.y)?;
+                    let (nx, ny) = divisions()?;
+                    structured::rectangle(x0, x1, y0, y1, nx, ny)
+                }
+                "cylinder" => {
+                    unused("mesh.y", m.y.is_some(), kind)?;
+                    unused("mesh.longitude", m.longitude.is_some(), kind)?;
+                    unused("mesh.latitude", m.latitude.is_some(), kind)?;
+                    let r = radius_scalar()?;
+                    let (x0, x1) = range("mesh.x", m.x)?;
+                    let (a0, a1) = deg("mesh.angle", m.angle)?;
+                    let (nx, ny) = divisions()?;
+                    structured::cylinder_panel(r, x0, x1, a0, a1, nx, ny)
+                }
+                "sphere" => {
+                    unused("mesh.x", m.x.is_some(), kind)?;
+                    unused("mesh.y", m.y.is_some(), kind)?;
+                    unused("mesh.angle", m.angle.is_some(), kind)?;
+                    let r = radius_scalar()?;
+                    let (l0, l1) = deg("mesh.longitude", m.longitude)?;
+                    let (b0, b1) = deg("mesh.latitude", m.latitude)?;
+                    for (k, b) in [("mesh.latitude", b0), ("mesh.latitude", b1)] {
+                        if !(b.abs() < std::f64::consts::FRAC_PI_2 - 1e-9) {
+                            return Err(c.fail(k, "must lie strictly between -90 and 90 degrees (a pole collapses the elements)"));
+                        }
+                    }
+                    let (nx, ny) = divisions()?;
+                    crate::mesh_shim::sphere_patch(r, l0, l1, b0, b1, nx, ny)
+                }
+                "annulus" => {
+                    unused("mesh.x", m.x.is_some(), kind)?;
+                    unused("mesh.y", m.y.is_some(), kind)?;
+                    unused("mesh.longitude", m.longitude.is_some(), kind)?;
+                    unused("mesh.latitude", m.latitude.is_some(), kind)?;
+                    let r = m
+                        .radius
+                        .as_ref()
+                        .and_then(|v| v.as_array())
+                        .and_then(|a| {
+                            let f: Option<Vec<f64>> = a
+                                .iter()
+                                .map(|x| x.as_float().or_else(|| x.as_integer().map(|i| i as f64)))
+                                .collect();
+                            f.filter(|f| f.len() == 2)
+                        })
+                        .ok_or_else(|| {
+                            c.fail("mesh.radius", "an annulus needs radius = [inner, outer]")
+                        })?;
+                    if !(r[0] > 0.0 && r[1] > r[0] && r[1].is_finite()) {
+                        return Err(c.fail("mesh.radius", format!("needs 0 < inner < outer, got {r:?}")));
+                    }
+                    let (a0, a1) = deg("mesh.angle", m.angle)?;
+                    let (nr, nt) = divisions()?;
+                    crate::mesh_shim::annulus(r[0], r[1], a0, a1, nr, nt)
+                }
+                other => {
+                    return Err(c.fail(
+                        "mesh.type",
+                        format!("unknown mesh type `{other}` (known: rectangle, cylinder, sphere, annulus)"),
+                    ));
+                }
+            };
+            Ok(mesh)
+        }
+        _ => Err(c.fail(
+            "mesh",
+            "give exactly one of `file` (gmsh .msh 4.1) or `type` (rectangle, cylinder, sphere, annulus)",
+        )),
+    }
+}
+
+/// `[[fix]]` entries into fixed dofs with their values per unit lambda. A dof
+/// fixed twice must get the same value.
+fn fixes(ctx: &Ctx, raw: &[RawFix]) -> Result<BTreeMap<Dof, f64>> {
+    let c = &ctx.c;
+    let mut fixed: BTreeMap<Dof, f64> = BTreeMap::new();
+    for (i, f) in raw.iter().enumerate() {
+        let key = format!("fix[{i}]");
+        let nodes = ctx.nodes(f.point, &f.group, &key)?;
+        use Component::*;
+        let shorthands = [
+            f.dofs.is_some(),
+            f.clamp == Some(true),
+            f.symmetry.is_some(),
+            f.simply_supported == Some(true),
+        ];
+        if shorthands.iter().filter(|x| **x).count() != 1 {
+            return Err(c.fail(
+                &key,
+                "give exactly one of `dofs`, `clamp = true`, `symmetry = \"x\" | \"y\" | \"z\"`, `simply_supported = true`",
+            ));
+        }
+        let comps: Vec<Component> = if let Some(d) = &f.dofs {
+            if d.is_empty() {
+                return Err(c.fail(&format!("{key}.dofs"), "is empty"));
+            }
+            let mut v = vec![];
+            for (k, name) in d.iter().enumerate() {
+                v.push(Component::from_name(name).ok_or_else(|| {
+                    c.fail(
+                        &format!("{key}.dofs[{k}]"),
+                        format!("unknown component `{name}` (known: ux, uy, uz, wx, wy, wz)"),
+                    )
+                })?);
+            }
+            v
+        } else if f.clamp == Some(true) {
+            Component::ALL.to_vec()
+        } else if let Some(s) = &f.symmetry {
+            // A symmetry plane normal to e_k: no displacement along e_k and
+            // the director stays in the plane (w_k = 0 for A3 in the plane).
+            match s.as_str() {
+                "x" => vec![Ux, Wx],
+                "y" => vec![Uy, Wy],
+                "z" => vec![Uz, Wz],
+                other => {
+                    return Err(c.fail(
+                        &format!("{key}.symmetry"),
+                        format!("expected \"x\", \"y\" or \"z\" (the plane's normal), got \"{other}\""),
+                    ));
+                }
+            }
+        } else {
+            vec![Ux, Uy, Uz]
         };
-        let ob = match o.kind.as_str() {
+        let values = match (&f.value, &f.dofs) {
+            (None, _) => vec![0.0; comps.len()],
+            (Some(v), Some(d)) => {
+                if v.len() != d.len() {
+                    return Err(c.fail(
+                        &format!("{key}.value"),
+                        format!("has {} entries for {} dofs", v.len(), d.len()),
+                    ));
+                }
+                for &x in v {
+                    c.finite(&format!("{key}.value"), x)?;
+                }
+                v.clone()
+            }
+            (Some(_), None) => {
+                return Err(c.fail(
+                    &format!("{key}.value"),
+                    "prescribed values need `dofs` (the components they apply to)",
+                ));
+            }
+        };
+        for &n in &nodes {
+            for (&comp, &val) in comps.iter().zip(&values) {
+                let dof = Dof::new(n, comp);
+                if let Some(old) = fixed.insert(dof, val)
+                    && old != val
+                {
+                    return Err(c.fail(
+                        &key,
+                        format!("{dof} is already fixed with value {old}, here {val}"),
+                    ));
+                }
+            }
+        }
+    }
+    Ok(fixed)
+}
+
+fn loads(ctx: &Ctx, raw: &[RawLoad]) -> Result<Vec<Load>> {
+    let c = &ctx.c;
+    let mut out = vec![];
+    for (i, l) in raw.iter().enumerate() {
+        let key = format!("load[{i}]");
+        let kinds = [
+            l.force.is_some(),
+            l.moment.is_some(),
+            l.line_force.is_some(),
+            l.traction.is_some(),
+            l.pressure.is_some(),
+        ];
+        if kinds.iter().filter(|x| **x).count() != 1 {
+            return Err(c.fail(
+                &key,
+                "give exactly one of `force`, `moment` (with point or group), `line_force` (with edge), `traction` or `pressure` (with surface)",
+            ));
+        }
+        if l.follower.is_some() && l.pressure.is_none() {
+            return Err(c.fail(
+                &format!("{key}.follower"),
+                "only a `pressure` can be follower (a `moment` is always applied as m × a3)",
+            ));
+        }
+        let targets = [l.point.is_some(), l.group.is_some(), l.edge.is_some(), l.surface.is_some()];
+        if targets.iter().filter(|x| **x).count() != 1 {
+            return Err(c.fail(&key, "give exactly one of `point`, `group`, `edge` or `surface`"));
+        }
+        let wrong = |what: &str, needs: &str| {
+            c.fail(&key, format!("`{what}` needs {needs}"))
+        };
+        let load = if let Some(f) = l.force {
+            if l.edge.is_some() || l.surface.is_some() {
+                return Err(wrong("force", "`point` or `group` (a force per node; use `line_force` on an edge, `traction` on a surface)"));
+            }
+            Load::Nodal {
+                nodes: ctx.nodes(l.point, &l.group, &key)?,
+                force: ctx.finite3(&format!("{key}.force"), f)?,
+            }
+        } else if let Some(m) = l.moment {
+            if l.edge.is_some() || l.surface.is_some() {
+                return Err(wrong("moment", "`point` or `group` (a couple per node)"));
+            }
+            Load::Moment {
+                nodes: ctx.nodes(l.point, &l.group, &key)?,
+                moment: ctx.finite3(&format!("{key}.moment"), m)?,
+            }
+        } else if let Some(q) = l.line_force {
+            let Some(e) = &l.edge else {
+                return Err(wrong("line_force", "`edge` (a group of mesh edges)"));
+            };
+            Load::Line {
+                edges: edge_group(ctx, e, &format!("{key}.edge"))?,
+                force: ctx.finite3(&format!("{key}.line_force"), q)?,
+            }
+        } else if let Some(t) = l.traction {
+            let Some(s) = &l.surface else {
+                return Err(wrong("traction", "`surface` (a group of elements)"));
+            };
+            Load::Traction {
+                quads: surface_group(ctx, s, &format!("{key}.surface"))?,
+                traction: ctx.finite3(&format!("{key}.traction"), t)?,
+            }
+        } else {
+            let p = c.finite(&format!("{key}.pressure"), l.pressure.unwrap_or(0.0))?;
+            let Some(s) = &l.surface else {
+                return Err(wrong("pressure", "`surface` (a group of elements)"));
+            };
+            Load::Pressure {
+                quads: surface_group(ctx, s, &format!("{key}.surface"))?,
+                pressure: p,
+                follower: l.follower.unwrap_or(false),
+            }
+        };
+        out.push(load);
+    }
+    Ok(out)
+}
+
+fn edge_group(ctx: &Ctx, name: &str, key: &str) -> Result<Vec<[usize; 2]>> {
+    if ctx.extra.contains_key(name) {
+        return Err(ctx.c.fail(key, format!("`{name}` is a [[group]] of nodes, not a group of edges")));
+    }
+    Ok(ctx.mesh.edges(name, ctx.c.file, key)?.to_vec())
+}
+
+fn surface_group(ctx: &Ctx, name: &str, key: &str) -> Result<Vec<usize>> {
+    if ctx.extra.contains_key(name) {
+        return Err(ctx.c.fail(key, format!("`{name}` is a [[group]] of nodes, not a group of elements")));
+    }
+    Ok(ctx.mesh.surface(name, ctx.c.file, key)?.to_vec())
+}
+
+fn obstacles(ctx: &Ctx, raw: &[RawObstacle]) -> Result<Vec<ObstacleSpec>> {
+    let c = &ctx.c;
+    let mut out: Vec<ObstacleSpec> = vec![];
+    for (i, o) in raw.iter().enumerate() {
+        let key = |k: &str| format!("obstacle[{i}].{k}");
+        let need = |v: Option<[f64; 3]>, k: &str| -> Result<Vec3> {
+            let v = v.ok_or_else(|| {
+                c.fail(&key(k), format!("missing: required by a `{}` obstacle", o.kind))
+            })?;
+            ctx.finite3(&key(k), v)
+        };
+        let not = |v: bool, k: &str| -> Result<()> {
+            if v {
+                Err(c.fail(&key(k), format!("not used by a `{}` obstacle; remove it", o.kind)))
+            } else {
+                Ok(())
+            }
+        };
+        let shape = match o.kind.as_str() {
             "cylinder" => {
+                not(o.point.is_some(), "point")?;
+                not(o.normal.is_some(), "normal")?;
                 let centre = need(o.centre, "centre")?;
                 let axis = need(o.axis, "axis")?;
                 let r = o.radius.ok_or_else(|| {
@@ -295,6 +903,9 @@ pub fn load(path: &Path) -> Result<ShellScene> {
                     .ok_or_else(|| c.fail(&key("axis"), "must be a non-zero vector"))?
             }
             "plane" => {
+                not(o.centre.is_some(), "centre")?;
+                not(o.axis.is_some(), "axis")?;
+                not(o.radius.is_some(), "radius")?;
                 let p = need(o.point, "point")?;
                 let n = need(o.normal, "normal")?;
                 Obstacle::plane(p, n)
@@ -307,96 +918,254 @@ pub fn load(path: &Path) -> Result<ShellScene> {
                 ));
             }
         };
-        obstacles.push(ob);
-    }
-    let (contact_nodes, contact_k, contact_eta, search_distance) =
-        match (&raw.contact, &raw.mesh.contact) {
-            (Some(ct), Some(group)) => {
-                let nodes = mesh.group(group, path, "mesh.contact")?.to_vec();
-                (
-                    nodes,
-                    c.positive("contact.k", ct.k)?,
-                    c.positive("contact.eta", ct.eta)?,
-                    c.positive("contact.search_distance", ct.search_distance)?,
-                )
-            }
-            (None, None) => (vec![], 0.0, 0.0, 0.0),
-            (Some(_), None) => {
-                return Err(c.fail(
-                    "mesh.contact",
-                    "missing: [contact] needs the group of candidate nodes",
-                ));
-            }
-            (None, Some(_)) => {
-                return Err(c.fail(
-                    "contact",
-                    "missing: mesh.contact is set but there is no [contact] table",
-                ));
-            }
-        };
-    if !contact_nodes.is_empty() && obstacles.is_empty() {
-        return Err(c.fail(
-            "obstacle",
-            "missing: [contact] needs at least one [[obstacle]]",
-        ));
-    }
-    let mut loads = vec![];
-    for (i, l) in raw.load.iter().enumerate() {
-        let force = v3(l.force);
-        if !force.iter().all(|x| x.is_finite()) {
-            return Err(c.fail(&format!("load[{i}].force"), "must be finite"));
-        }
-        match (&l.point, &l.group) {
-            (Some(p), None) => {
-                let node = mesh.node_at(&v3(*p), tol).ok_or_else(|| {
-                    c.fail(
-                        &format!("load[{i}].point"),
-                        format!(
-                            "({}, {}, {}) is not a node of {} (no node within {tol:e} m)",
-                            p[0],
-                            p[1],
-                            p[2],
-                            mesh.file.display()
-                        ),
-                    )
-                })?;
-                loads.push(PointLoad { node, force });
-            }
-            (None, Some(g)) => {
-                for &node in mesh.group(g, path, &format!("load[{i}].group"))? {
-                    loads.push(PointLoad { node, force });
+        let motion = match &o.motion {
+            None => Motion::Fixed,
+            Some(m) => {
+                let mk = |k: &str| format!("obstacle[{i}].motion.{k}");
+                match m.kind.as_str() {
+                    "fixed" => {
+                        if m.velocity.is_some() || m.omega.is_some() {
+                            return Err(c.fail(&mk("type"), "a `fixed` motion takes no velocity or omega"));
+                        }
+                        Motion::Fixed
+                    }
+                    "translate" => {
+                        if m.omega.is_some() {
+                            return Err(c.fail(&mk("omega"), "not used by a `translate` motion"));
+                        }
+                        let v = m.velocity.ok_or_else(|| {
+                            c.fail(&mk("velocity"), "missing: required by a `translate` motion")
+                        })?;
+                        Motion::Translate {
+                            velocity: ctx.finite3(&mk("velocity"), v)?,
+                        }
+                    }
+                    "rotate" => {
+                        if m.velocity.is_some() {
+                            return Err(c.fail(&mk("velocity"), "not used by a `rotate` motion (it turns about the obstacle's own axis)"));
+                        }
+                        let w = m.omega.ok_or_else(|| {
+                            c.fail(&mk("omega"), "missing: required by a `rotate` motion")
+                        })?;
+                        Motion::Rotate {
+                            omega: c.finite(&mk("omega"), w)?,
+                        }
+                    }
+                    other => {
+                        return Err(c.fail(
+                            &mk("type"),
+                            format!("unknown motion `{other}` (known: fixed, translate, rotate)"),
+                        ));
+                    }
                 }
             }
-            _ => {
+        };
+        let name = o.name.clone().unwrap_or_else(|| format!("obstacle{i}"));
+        if out.iter().any(|x| x.name == name) {
+            return Err(c.fail(&key("name"), format!("`{name}` names two obstacles")));
+        }
+        out.push(ObstacleSpec { name, shape, motion });
+    }
+    Ok(out)
+}
+
+fn axis_of(s: &str) -> Option<usize> {
+    match s {
+        "x" => Some(0),
+        "y" => Some(1),
+        "z" => Some(2),
+        _ => None,
+    }
+}
+
+/// The probe quantities, for error messages and docs.
+pub const QUANTITIES: &str = "ux, uy, uz, wx, wy, wz, x, y, z, reaction_x, reaction_y, reaction_z, contact_rn, contact_x, contact_y, contact_z, min_gap, contacts, lambda, arclength";
+
+fn probes(
+    ctx: &Ctx,
+    raw: &[RawProbe],
+    fixed: &BTreeMap<Dof, f64>,
+    obstacles: &[ObstacleSpec],
+    has_contact: bool,
+) -> Result<Vec<Probe>> {
+    let c = &ctx.c;
+    let mut out: Vec<Probe> = vec![];
+    for (i, p) in raw.iter().enumerate() {
+        let key = format!("probe[{i}]");
+        let name = p.name.trim();
+        if name.is_empty()
+            || name.contains([',', '"', '\n'])
+            || name == "lambda"
+            || out.iter().any(|q| q.name == name)
+        {
+            return Err(c.fail(
+                &format!("{key}.name"),
+                format!("`{name}` is empty, repeated, `lambda` (always column 1) or holds a comma or quote"),
+            ));
+        }
+        let q = p.quantity.as_str();
+        let obstacle = match &p.obstacle {
+            None => None,
+            Some(o) => Some(obstacles.iter().position(|x| &x.name == o).ok_or_else(|| {
+                c.fail(
+                    &format!("{key}.obstacle"),
+                    format!(
+                        "no obstacle named `{o}` (have: {})",
+                        obstacles.iter().map(|x| x.name.as_str()).collect::<Vec<_>>().join(", ")
+                    ),
+                )
+            })?),
+        };
+        let is_contact = q.starts_with("contact") || q == "min_gap";
+        if obstacle.is_some() && !is_contact {
+            return Err(c.fail(&format!("{key}.obstacle"), format!("not used by a `{q}` probe")));
+        }
+        if is_contact && !has_contact {
+            return Err(c.fail(&format!("{key}.quantity"), format!("`{q}` needs a [contact] table")));
+        }
+        let no_target = |what: &str| -> Result<()> {
+            if p.point.is_some() || p.group.is_some() {
+                Err(c.fail(&key, format!("a `{what}` probe takes no point or group")))
+            } else {
+                Ok(())
+            }
+        };
+        let optional_nodes = || -> Result<Option<Vec<usize>>> {
+            if p.point.is_none() && p.group.is_none() {
+                Ok(None)
+            } else {
+                ctx.nodes(p.point, &p.group, &key).map(Some)
+            }
+        };
+        let (quantity, unit) = if let Some(comp) = Component::from_name(q) {
+            (
+                Quantity::Dof {
+                    nodes: ctx.nodes(p.point, &p.group, &key)?,
+                    component: comp,
+                },
+                if comp.is_displacement() { "m" } else { "-" },
+            )
+        } else if let Some(axis) = axis_of(q) {
+            (
+                Quantity::Position {
+                    nodes: ctx.nodes(p.point, &p.group, &key)?,
+                    axis,
+                },
+                "m",
+            )
+        } else if let Some(axis) = q.strip_prefix("reaction_").and_then(axis_of) {
+            let nodes = ctx.nodes(p.point, &p.group, &key)?;
+            let comp = Component::DISPLACEMENT[axis];
+            if let Some(&n) = nodes.iter().find(|&&n| !fixed.contains_key(&Dof::new(n, comp))) {
                 return Err(c.fail(
-                    &format!("load[{i}]"),
-                    "give exactly one of `point` or `group`",
+                    &key,
+                    format!("a reaction needs fixed dofs, but {} is free", Dof::new(n, comp)),
                 ));
             }
-        }
+            (Quantity::Reaction { nodes, axis }, "N")
+        } else if q == "contact_rn" {
+            (
+                Quantity::ContactNormal {
+                    nodes: optional_nodes()?,
+                    obstacle,
+                },
+                "N",
+            )
+        } else if let Some(axis) = q.strip_prefix("contact_").and_then(axis_of) {
+            (
+                Quantity::ContactForce {
+                    nodes: optional_nodes()?,
+                    obstacle,
+                    axis,
+                },
+                "N",
+            )
+        } else if q == "min_gap" {
+            no_target(q)?;
+            (Quantity::MinGap { obstacle }, "m")
+        } else if q == "contacts" {
+            no_target(q)?;
+            (Quantity::Contacts { obstacle }, "-")
+        } else if q == "lambda" {
+            no_target(q)?;
+            (Quantity::Lambda, "-")
+        } else if q == "arclength" {
+            no_target(q)?;
+            (Quantity::Arclength, "-")
+        } else {
+            return Err(c.fail(
+                &format!("{key}.quantity"),
+                format!("unknown quantity `{q}` (known: {QUANTITIES})"),
+            ));
+        };
+        out.push(Probe {
+            name: name.to_string(),
+            quantity,
+            unit,
+        });
     }
-    if loads.is_empty() {
-        return Err(c.fail("load", "missing: at least one [[load]]"));
+    Ok(out)
+}
+
+fn solver(c: &Checker, s: &RawSolver, size: f64) -> Result<(Method, ContinuationConfig, f64)> {
+    let lambda_end = c.finite("solver.lambda_end", s.lambda_end)?;
+    if lambda_end == 0.0 {
+        return Err(c.fail("solver.lambda_end", "must differ from 0 (the path starts at lambda = 0)"));
     }
-    let s = &raw.solver;
-    if s.order < 2 {
-        return Err(c.fail("solver.order", format!("must be >= 2, got {}", s.order)));
+    let order = s.order.unwrap_or(15);
+    if !(2..=60).contains(&order) {
+        return Err(c.fail("solver.order", format!("must lie in [2, 60], got {order}")));
     }
-    let solver = ContinuationConfig {
-        order: s.order,
-        eps: c.positive("solver.eps", s.eps)?,
-        lambda_end: c.finite("solver.lambda_end", s.lambda_end)?,
-        max_steps: s.max_steps,
-        pade: s.pade,
-        residual_tol: c.positive("solver.residual_tol", s.residual_tol)?,
-        correct: s.correct,
-        max_corrections: s.max_corrections,
+    let max_steps = s.max_steps.unwrap_or(20_000);
+    if max_steps == 0 {
+        return Err(c.fail("solver.max_steps", "must be >= 1"));
+    }
+    let residual_tol = c.positive("solver.residual_tol", s.residual_tol.unwrap_or(1e-6))?;
+    let length_scale = match s.length_scale {
+        Some(l) => c.positive("solver.length_scale", l)?,
+        None => size,
+    };
+    let cfg = ContinuationConfig {
+        order,
+        eps: c.positive("solver.eps", s.eps.unwrap_or(1e-8))?,
+        lambda_end,
+        max_steps,
+        pade: s.pade.unwrap_or(false),
+        residual_tol,
+        correct: s.correct.unwrap_or(true),
+        max_corrections: s.max_corrections.unwrap_or(10),
         ..Default::default()
     };
-    let newton = match s.method.as_deref() {
-        None | Some("anm") => None,
-        Some("newton") => {
-            use crate::series::newton::{Control, NewtonConfig};
+    let newton_keys = [
+        ("solver.newton_control", s.newton_control.is_some()),
+        ("solver.newton_step", s.newton_step.is_some()),
+        ("solver.newton_max_step", s.newton_max_step.is_some()),
+        ("solver.newton_tol", s.newton_tol.is_some()),
+    ];
+    let anm_keys = [
+        ("solver.order", s.order.is_some()),
+        ("solver.eps", s.eps.is_some()),
+        ("solver.pade", s.pade.is_some()),
+    ];
+    let method_name = s.method.as_deref().unwrap_or("anm");
+    let refuse = |keys: &[(&str, bool)]| -> Result<()> {
+        match keys.iter().find(|(_, present)| *present) {
+            Some((k, _)) => Err(c.fail(k, format!("not used by solver.method = \"{method_name}\"; remove it"))),
+            None => Ok(()),
+        }
+    };
+    let method = match method_name {
+        "anm" => {
+            refuse(&newton_keys)?;
+            Method::Anm
+        }
+        "linear" => {
+            refuse(&newton_keys)?;
+            refuse(&anm_keys)?;
+            Method::Linear
+        }
+        "newton" => {
+            refuse(&anm_keys)?;
             let control = match s.newton_control.as_deref() {
                 None | Some("arclength") => Control::Arclength,
                 Some("load") => Control::Load,
@@ -408,78 +1177,22 @@ pub fn load(path: &Path) -> Result<ShellScene> {
                 }
             };
             let initial_step = c.positive("solver.newton_step", s.newton_step.unwrap_or(0.01))?;
-            Some(NewtonConfig {
+            Method::Newton(NewtonConfig {
                 control,
                 initial_step,
                 max_step: c.positive("solver.newton_max_step", s.newton_max_step.unwrap_or(0.1))?,
-                tol: c.positive("solver.newton_tol", s.newton_tol.unwrap_or(s.residual_tol))?,
-                lambda_end: solver.lambda_end,
-                max_steps: s.max_steps,
+                tol: c.positive("solver.newton_tol", s.newton_tol.unwrap_or(residual_tol))?,
+                lambda_end,
+                max_steps,
                 ..Default::default()
             })
         }
-        Some(other) => {
+        other => {
             return Err(c.fail(
                 "solver.method",
-                format!("expected \"anm\" or \"newton\", got \"{other}\""),
+                format!("expected \"anm\", \"newton\" or \"linear\", got \"{other}\""),
             ));
         }
     };
-    let o = &raw.output;
-    let lambda_step = c.positive("output.lambda_step", o.lambda_step)?;
-    let probe = mesh.node_at(&v3(o.probe), tol).ok_or_else(|| {
-        c.fail(
-            "output.probe",
-            format!("({:?}) is not a node of {}", o.probe, mesh.file.display()),
-        )
-    })?;
-    for (k, &l) in o.snapshots.iter().enumerate() {
-        let on_grid = (l / lambda_step - (l / lambda_step).round()).abs() < 1e-9;
-        if !(l >= 0.0 && l.is_finite() && on_grid) {
-            return Err(c.fail(&format!("output.snapshots[{k}]"), format!("{l} is not a value of the lambda grid (multiples of output.lambda_step = {lambda_step})")));
-        }
-    }
-    if o.hdf5 && !cfg!(feature = "hdf5") {
-        return Err(c.fail(
-            "output.hdf5",
-            "this build has no HDF5 support: rebuild with `--features hdf5`",
-        ));
-    }
-    let mut rows: [Vec<usize>; 3] = Default::default();
-    for (k, &x) in o.contact_rows.iter().enumerate() {
-        rows[k] = (0..mesh.nodes.len())
-            .filter(|&n| (mesh.nodes[n][0] - x).abs() <= tol)
-            .collect();
-        if rows[k].is_empty() {
-            return Err(c.fail(
-                &format!("output.contact_rows[{k}]"),
-                format!("no node row at x = {x} in {}", mesh.file.display()),
-            ));
-        }
-    }
-    Ok(ShellScene {
-        file: path.to_path_buf(),
-        description: raw.scene.description,
-        directors,
-        material: Material { young, poisson },
-        thickness,
-        clamped,
-        obstacles,
-        contact_nodes,
-        contact_k,
-        contact_eta,
-        search_distance,
-        loads,
-        solver,
-        lambda_step,
-        probe,
-        rows,
-        row_x: o.contact_rows,
-        vtk_every: o.vtk_every,
-        plot: o.plot,
-        newton,
-        snapshots: o.snapshots.clone(),
-        hdf5: o.hdf5,
-        mesh,
-    })
+    Ok((method, cfg, length_scale))
 }

@@ -13,6 +13,17 @@
 //! m ⟂ a3 (|a3|² = 1 + 2 E⁰_33) and is bilinear in (λ, w): it stays
 //! polynomial, its series term is −Σ_{r=1}^{p−1} λ_r m × w_{p−r}.
 //!
+//! A follower pressure p on an element adds −λ f(x), f_a(x) = ∫ N_a p
+//! (x,ξ × x,η) dξ dη, quadratic in the current positions x: f = B(x, x)
+//! (crate::fe::surface_load). Its tangent is the load stiffness −λ ∂f/∂x
+//! and its λ column −f(x); its series term at order p is
+//! −Σ_{r=1}^{p−1} λ_r f_{p−r} − λ_0 Σ_{s=1}^{p−1} B(x_s, x_{p−s}), with
+//! f_q = Σ_{s=0}^{q} B(x_s, x_{q−s}) and x_0 = X + v_0.
+//!
+//! Fixed dofs hold λ times their prescribed value (`prescribed`), so
+//! their order-p coefficient is λ_p times it; an obstacle translating with
+//! velocity V in λ enters as the relative position x − λ V.
+//!
 //! Series (order p ≥ 2, U_p = λ_p = 0): element convolutions
 //! in nodal Gram form (see [`super::series`]), the follower term above, and per contact pair
 //! the Taylor propagation of h, n (obstacle::GapSeries) and R (eq. 3,
@@ -25,9 +36,11 @@ use super::element::ShellElement;
 use super::kinematics::Vec3;
 use super::material::Material;
 use super::series::ElementSeries;
+use crate::contact::Motion;
 use crate::contact::obstacle::{GapSeries, Obstacle};
 use crate::contact::search::{self, ContactPair};
 use crate::error::{Error, Result};
+use crate::fe::surface_load;
 use crate::linalg::SparseMatrix;
 use crate::series::ContinuationProblem;
 
@@ -36,6 +49,13 @@ use crate::series::ContinuationProblem;
 pub struct FollowerCouple {
     pub node: usize,
     pub moment: Vec3,
+}
+
+/// A follower pressure on one element: force −λ f(x) (module doc).
+#[derive(Clone, Debug)]
+pub struct FollowerPressure {
+    pub nodes: [usize; 4],
+    pub pressure: f64,
 }
 
 /// Contact reaction of one active pair at a state.
@@ -64,13 +84,23 @@ pub struct ShellModel {
     ndof: usize,
     /// Dead load pattern F on the full dofs.
     pub dead: Vec<f64>,
+    /// Prescribed values per unit lambda on the full dofs (fixed dofs hold
+    /// lambda times this; zero elsewhere).
+    pub prescribed: Vec<f64>,
     pub follower: Vec<FollowerCouple>,
+    pub pressures: Vec<FollowerPressure>,
+    /// Obstacles at lambda = 0 and their motion in lambda.
     pub obstacles: Vec<Obstacle>,
+    pub motions: Vec<Motion>,
     pub pairs: Vec<ContactPair>,
     pub search_distance: f64,
+    /// Characteristic length of the displacement unknowns in the step
+    /// control (the director unknowns are dimensionless).
+    pub length_scale: f64,
     active: Vec<usize>,
     // Series state of the current step.
     series_u0: Vec<f64>,
+    series_lambda0: f64,
     el_series: Vec<ElementSeries>,
     pair_series: Vec<PairSeries>,
 }
@@ -99,12 +129,17 @@ impl ShellModel {
             free: vec![None; 6 * n],
             ndof: 0,
             dead: vec![0.0; 6 * n],
+            prescribed: vec![0.0; 6 * n],
             follower: vec![],
+            pressures: vec![],
             obstacles: vec![],
+            motions: vec![],
             pairs: vec![],
             search_distance: f64::INFINITY,
+            length_scale: 1.0,
             active: vec![],
             series_u0: vec![],
+            series_lambda0: f64::NAN,
             el_series: vec![],
             pair_series: vec![],
         };
@@ -130,7 +165,15 @@ impl ShellModel {
         self.ndof = next;
     }
 
-    /// Adds obstacles and the contact pairs of `nodes`, delta = initial gap.
+    /// Values per unit lambda of the fixed dofs (full vector; entries at
+    /// free dofs are ignored): the fixed dof i holds lambda prescribed[i].
+    pub fn set_prescribed(&mut self, prescribed: Vec<f64>) {
+        assert_eq!(prescribed.len(), self.free.len());
+        self.prescribed = prescribed;
+    }
+
+    /// Adds obstacles (fixed) and the contact pairs of `nodes`, delta =
+    /// initial gap.
     pub fn set_contact(
         &mut self,
         obstacles: Vec<Obstacle>,
@@ -140,6 +183,7 @@ impl ShellModel {
         distance: f64,
     ) -> std::result::Result<(), (usize, usize, f64)> {
         self.pairs = search::pairs(nodes, &self.x0, &obstacles, k, eta)?;
+        self.motions = vec![Motion::Fixed; obstacles.len()];
         self.obstacles = obstacles;
         self.search_distance = distance;
         self.active = search::active(&self.pairs, &self.x0, &self.obstacles, distance);
@@ -150,9 +194,41 @@ impl ShellModel {
         self.x0.len()
     }
 
-    /// Free-dof vector to full vector (zeros at fixed dofs).
-    pub fn expand(&self, u: &[f64]) -> Vec<f64> {
-        self.free.iter().map(|f| f.map_or(0.0, |i| u[i])).collect()
+    /// Characteristic magnitude of each free unknown: `length_scale` for a
+    /// displacement, 1 for a director component.
+    pub fn scales(&self) -> Vec<f64> {
+        let mut s = vec![0.0; self.ndof];
+        for (i, f) in self.free.iter().enumerate() {
+            if let Some(k) = f {
+                s[*k] = if i % 6 < 3 { self.length_scale } else { 1.0 };
+            }
+        }
+        s
+    }
+
+    /// Sets the obstacles' motions in lambda (one per obstacle).
+    pub fn set_motions(&mut self, motions: Vec<Motion>) {
+        assert_eq!(motions.len(), self.obstacles.len());
+        self.motions = motions;
+    }
+
+    /// The obstacles where their motion has taken them at lambda.
+    pub fn obstacles_at(&self, lambda: f64) -> Vec<Obstacle> {
+        self.obstacles
+            .iter()
+            .zip(&self.motions)
+            .map(|(o, m)| o.translated(m.shift(lambda)))
+            .collect()
+    }
+
+    /// Free-dof vector to full vector at lambda: fixed dofs hold
+    /// lambda × their prescribed value.
+    pub fn expand(&self, u: &[f64], lambda: f64) -> Vec<f64> {
+        self.free
+            .iter()
+            .zip(&self.prescribed)
+            .map(|(f, p)| f.map_or(lambda * p, |i| u[i]))
+            .collect()
     }
 
     fn reduce(&self, full: &[f64]) -> Vec<f64> {
@@ -204,10 +280,11 @@ impl ShellModel {
     /// Contact reactions of the active pairs at the full state.
     pub fn contact_forces(&self, full: &[f64], lambda: f64) -> Result<Vec<NodalContact>> {
         let mut out = Vec::with_capacity(self.active.len());
+        let obstacles = self.obstacles_at(lambda);
         for &ip in &self.active {
             let pair = &self.pairs[ip];
             let x = self.x0[pair.node] + Self::vec3(full, pair.node, 0);
-            let g = self.obstacles[pair.obstacle]
+            let g = obstacles[pair.obstacle]
                 .gap(&x)
                 .ok_or_else(|| self.gap_error(pair.node, lambda))?;
             out.push(NodalContact {
@@ -252,12 +329,29 @@ impl ShellModel {
                 r[6 * c.node + 3 + k] -= fw[k];
             }
         }
+        for pr in &self.pressures {
+            let f = surface_load::follower_forces(pr.pressure, &self.pressure_x(pr, full, true));
+            for (i, &n) in pr.nodes.iter().enumerate() {
+                for k in 0..3 {
+                    r[6 * n + k] -= lambda * f[i][k];
+                }
+            }
+        }
         for c in self.contact_forces(full, lambda)? {
             for k in 0..3 {
                 r[6 * c.node + k] -= c.r * c.normal[k];
             }
         }
         Ok(r)
+    }
+
+    /// Nodal positions of a pressure element: X + v (`total`) or v alone
+    /// (a series coefficient of order >= 1).
+    fn pressure_x(&self, pr: &FollowerPressure, full: &[f64], total: bool) -> [Vec3; 4] {
+        pr.nodes.map(|n| {
+            let v = Self::vec3(full, n, 0);
+            if total { self.x0[n] + v } else { v }
+        })
     }
 
     fn check_finite(v: &[f64], lambda: f64, what: &str) -> Result<()> {
@@ -272,10 +366,11 @@ impl ShellModel {
         Ok(())
     }
 
-    /// Refreshes the active contact set at the full state.
-    pub fn update_active(&mut self, full: &[f64]) {
+    /// Refreshes the active contact set at the full state at lambda.
+    pub fn update_active(&mut self, full: &[f64], lambda: f64) {
         let x = self.positions(full);
-        self.active = search::active(&self.pairs, &x, &self.obstacles, self.search_distance);
+        let obstacles = self.obstacles_at(lambda);
+        self.active = search::active(&self.pairs, &x, &obstacles, self.search_distance);
     }
 
     /// The active set is frozen during a step: a candidate left out at the
@@ -290,12 +385,13 @@ impl ShellModel {
         for &i in &self.active {
             is_active[i] = true;
         }
+        let obstacles = self.obstacles_at(lambda);
         for (i, p) in self.pairs.iter().enumerate() {
             if is_active[i] {
                 continue;
             }
             let x = self.x0[p.node] + Self::vec3(full, p.node, 0);
-            if let Some(g) = self.obstacles[p.obstacle].gap(&x)
+            if let Some(g) = obstacles[p.obstacle].gap(&x)
                 && g.h < 0.5 * self.search_distance
             {
                 return Err(Error::ContactMissed {
@@ -317,9 +413,11 @@ impl ShellModel {
 
     /// Order 0 of the step's series at u0: element series (which also give
     /// the element tangents) and contact pair series.
-    fn start_series(&mut self, u0: &[f64]) -> Result<()> {
-        let full = self.expand(u0);
+    fn start_series(&mut self, u0: &[f64], lambda0: f64) -> Result<()> {
+        let full = self.expand(u0, lambda0);
         self.series_u0 = u0.to_vec();
+        self.series_lambda0 = lambda0;
+        let obstacles = self.obstacles_at(lambda0);
         self.el_series = self
             .elements
             .iter()
@@ -332,7 +430,7 @@ impl ShellModel {
         for &ip in &self.active {
             let pair = &self.pairs[ip];
             let x = self.x0[pair.node] + Self::vec3(&full, pair.node, 0);
-            let gap = GapSeries::start(&self.obstacles[pair.obstacle], &x)
+            let gap = GapSeries::start(&obstacles[pair.obstacle], &x)
                 .ok_or_else(|| self.gap_error(pair.node, f64::NAN))?;
             let r0 = pair.law.force(gap.h[0]);
             ps.push(PairSeries {
@@ -345,8 +443,11 @@ impl ShellModel {
         Ok(())
     }
 
-    fn complete_order(&mut self, um: &[f64]) {
-        let full = self.expand(um);
+    /// Completes order m from (u_m, lambda_m): fixed dofs move by
+    /// lambda_m × prescribed, a translating obstacle by lambda_m V, so a
+    /// contact node's position relative to it moves by x_m − lambda_m V.
+    fn complete_order(&mut self, um: &[f64], lm: f64) {
+        let full = self.expand(um, lm);
         for (e, st) in self.elements.iter().zip(self.el_series.iter_mut()) {
             let x = std::array::from_fn(|i| Self::vec3(&full, e.nodes[i], 0));
             let d = std::array::from_fn(|i| Self::vec3(&full, e.nodes[i], 3));
@@ -355,7 +456,9 @@ impl ShellModel {
         for ps in &mut self.pair_series {
             let pair = &self.pairs[ps.pair];
             let m = ps.gap.orders();
-            ps.gap.complete(&Self::vec3(&full, pair.node, 0));
+            let v = self.motions[pair.obstacle].velocity();
+            ps.gap
+                .complete(&(Self::vec3(&full, pair.node, 0) - v * lm));
             let rm = pair.law.force_coeff(&ps.r, &ps.gap.h, m);
             ps.r.push(rm);
         }
@@ -368,7 +471,7 @@ impl ContinuationProblem for ShellModel {
     }
 
     fn residual(&mut self, u: &[f64], lambda: f64) -> Result<Vec<f64>> {
-        let full = self.expand(u);
+        let full = self.expand(u, lambda);
         self.check_inactive(&full, lambda)?;
         let r = self.residual_full(&full, lambda)?;
         Self::check_finite(&r, lambda, "residual")?;
@@ -376,15 +479,24 @@ impl ContinuationProblem for ShellModel {
     }
 
     fn tangent(&mut self, u: &[f64], lambda: f64) -> Result<(SparseMatrix, Vec<f64>)> {
-        let full = self.expand(u);
-        self.update_active(&full);
-        self.start_series(u)?;
+        let full = self.expand(u, lambda);
+        self.update_active(&full, lambda);
+        self.start_series(u, lambda)?;
         let mut k = SparseMatrix::new(self.ndof);
         k.entries
             .reserve(576 * self.elements.len() + 9 * (self.follower.len() + self.active.len()));
-        let mut add = |free: &[Option<usize>], gi: usize, gj: usize, v: f64| {
-            if let (Some(i), Some(j)) = (free[gi], free[gj]) {
-                k.add(i, j, v);
+        // dR/dlambda on the full dofs: −F, the follower couples' −m × a3,
+        // and for a fixed dof j held at lambda p_j the column K_ij p_j.
+        let mut rl = vec![0.0; full.len()];
+        for (r, f) in rl.iter_mut().zip(&self.dead) {
+            *r = -f;
+        }
+        let prescribed = &self.prescribed;
+        let mut add = |free: &[Option<usize>], rl: &mut [f64], gi: usize, gj: usize, v: f64| {
+            match (free[gi], free[gj]) {
+                (Some(i), Some(j)) => k.add(i, j, v),
+                (Some(_), None) => rl[gi] += v * prescribed[gj],
+                _ => {}
             }
         };
         for (e, st) in self.elements.iter().zip(&self.el_series) {
@@ -393,13 +505,9 @@ impl ContinuationProblem for ShellModel {
                 let ga = 6 * e.nodes[a / 6] + a % 6;
                 for b in 0..24 {
                     let gb = 6 * e.nodes[b / 6] + b % 6;
-                    add(&self.free, ga, gb, ke[(a, b)]);
+                    add(&self.free, &mut rl, ga, gb, ke[(a, b)]);
                 }
             }
-        }
-        let mut rl = vec![0.0; full.len()];
-        for (r, f) in rl.iter_mut().zip(&self.dead) {
-            *r = -f;
         }
         for c in &self.follower {
             let a3 = self.a30[c.node] + Self::vec3(&full, c.node, 3);
@@ -412,6 +520,7 @@ impl ContinuationProblem for ShellModel {
                 for j in 0..3 {
                     add(
                         &self.free,
+                        &mut rl,
                         6 * c.node + 3 + i,
                         6 * c.node + 3 + j,
                         -lambda * mx[i][j],
@@ -419,18 +528,35 @@ impl ContinuationProblem for ShellModel {
                 }
             }
         }
+        for pr in &self.pressures {
+            let x = self.pressure_x(pr, &full, true);
+            let f = surface_load::follower_forces(pr.pressure, &x);
+            let kf = surface_load::follower_stiffness(pr.pressure, &x);
+            for a in 0..12 {
+                let ga = 6 * pr.nodes[a / 3] + a % 3;
+                rl[ga] -= f[a / 3][a % 3];
+                for b in 0..12 {
+                    let gb = 6 * pr.nodes[b / 3] + b % 3;
+                    add(&self.free, &mut rl, ga, gb, -lambda * kf[a][b]);
+                }
+            }
+        }
+        let obstacles = self.obstacles_at(lambda);
         for &ip in &self.active {
             let pair = &self.pairs[ip];
             let x = self.x0[pair.node] + Self::vec3(&full, pair.node, 0);
-            let g = self.obstacles[pair.obstacle]
+            let g = obstacles[pair.obstacle]
                 .gap(&x)
                 .ok_or_else(|| self.gap_error(pair.node, lambda))?;
             let r = pair.law.force(g.h);
             let dr = pair.law.stiffness(g.h);
+            // The gap reads x − lambda V: the lambda column is −K_c V.
+            let vel = self.motions[pair.obstacle].velocity();
             for i in 0..3 {
                 for j in 0..3 {
                     let v = -(dr * g.n[i] * g.n[j] + r * g.dn[(i, j)]);
-                    add(&self.free, 6 * pair.node + i, 6 * pair.node + j, v);
+                    add(&self.free, &mut rl, 6 * pair.node + i, 6 * pair.node + j, v);
+                    rl[6 * pair.node + i] -= v * vel[j];
                 }
             }
         }
@@ -447,7 +573,7 @@ impl ContinuationProblem for ShellModel {
                 what: format!(
                     "tangent matrix (entry {}: node {}, dof {})",
                     t.row,
-                    i / 6,
+                    i / 6 + 1,
                     i % 6
                 ),
             });
@@ -457,13 +583,13 @@ impl ContinuationProblem for ShellModel {
 
     fn series_rhs(&mut self, p: usize, u: &[Vec<f64>], lambda: &[f64]) -> Result<Vec<f64>> {
         let fresh = self.el_series.first().map_or(0, |s| s.orders());
-        if fresh != p - 1 || self.series_u0 != u[0] {
-            self.start_series(&u[0])?;
-            for um in &u[1..p - 1] {
-                self.complete_order(um);
+        if fresh != p - 1 || self.series_u0 != u[0] || self.series_lambda0 != lambda[0] {
+            self.start_series(&u[0], lambda[0])?;
+            for m in 1..p - 1 {
+                self.complete_order(&u[m], lambda[m]);
             }
         }
-        self.complete_order(&u[p - 1]);
+        self.complete_order(&u[p - 1], lambda[p - 1]);
         let mut rhs = vec![0.0; self.free.len()];
         for (e, st) in self.elements.iter().zip(&mut self.el_series) {
             let f = st.rhs(e);
@@ -474,7 +600,7 @@ impl ContinuationProblem for ShellModel {
             }
         }
         if !self.follower.is_empty() {
-            let fulls: Vec<Vec<f64>> = u[1..p].iter().map(|x| self.expand(x)).collect();
+            let fulls: Vec<Vec<f64>> = (1..p).map(|r| self.expand(&u[r], lambda[r])).collect();
             for c in &self.follower {
                 let mut s = Vec3::zeros();
                 for r in 1..p {
@@ -482,6 +608,38 @@ impl ContinuationProblem for ShellModel {
                 }
                 for k in 0..3 {
                     rhs[6 * c.node + 3 + k] -= s[k];
+                }
+            }
+        }
+        if !self.pressures.is_empty() {
+            // x_s of every order s < p (x_0 = X + v_0).
+            let fulls: Vec<Vec<f64>> = (0..p).map(|r| self.expand(&u[r], lambda[r])).collect();
+            for pr in &self.pressures {
+                let xs: Vec<[Vec3; 4]> = (0..p)
+                    .map(|s| self.pressure_x(pr, &fulls[s], s == 0))
+                    .collect();
+                let b = |i: usize, j: usize| surface_load::follower_bilinear(pr.pressure, &xs[i], &xs[j]);
+                let mut total = [Vec3::zeros(); 4];
+                let mut accumulate = |scale: f64, f: [Vec3; 4]| {
+                    for i in 0..4 {
+                        total[i] += f[i] * scale;
+                    }
+                };
+                // λ_0 f*_p.
+                for s in 1..p {
+                    accumulate(lambda[0], b(s, p - s));
+                }
+                // λ_r f_{p−r}, r = 1..p−1.
+                for r in 1..p {
+                    let q = p - r;
+                    for s in 0..=q {
+                        accumulate(lambda[r], b(s, q - s));
+                    }
+                }
+                for (i, &n) in pr.nodes.iter().enumerate() {
+                    for k in 0..3 {
+                        rhs[6 * n + k] -= total[i][k];
+                    }
                 }
             }
         }

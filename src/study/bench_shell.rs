@@ -1,9 +1,9 @@
-//! plate-cylinder work-precision: the ANM against the Newton-Raphson baseline
-//! on the same shell model (same residual, tangent, element and sparse LU),
-//! at several orders, tolerances and step sizes.
+//! Shell work-precision: the ANM against the Newton-Raphson baseline on the
+//! same shell model (same residual, tangent, element and sparse LU), at
+//! several orders, tolerances and step sizes.
 //!
-//! Error = max over the output grid of |uz_A - uz_A,ref| / max |uz_A,ref|
-//! (the target quantity), against the tightest ANM run (order 20,
+//! Error = max over the output grid of |q - q_ref| / max |q_ref| for the
+//! scene's key probe q (its first [[probe]]; uz_A on plate-cylinder), against the tightest ANM run (order 20,
 //! eps 1e-12, step-end residual [`REFERENCE_RESIDUAL`]); the Newton run at
 //! that residual is measured against it too, as the floor of what the table
 //! resolves. Both methods report on the same λ grid
@@ -12,7 +12,8 @@
 
 use super::bench::{BenchRow, median};
 use crate::error::Result;
-use crate::model::plate_cylinder::{RunReport, run_loaded};
+use crate::run::{RunReport, run_loaded};
+use crate::scene::shell::Method;
 use crate::scene::shell::ShellScene;
 use crate::series::newton::{Control, NewtonConfig};
 
@@ -61,21 +62,21 @@ impl ShellMethod {
     /// The scene with this method's settings and the benchmark's output grid.
     pub fn configure(&self, scene: &ShellScene) -> ShellScene {
         let mut s = scene.clone();
-        s.lambda_step = LAMBDA_STEP;
-        s.plot = false;
+        s.output.lambda_step = LAMBDA_STEP * s.solver.lambda_end.abs();
+        s.output.plot = false;
         match self {
             ShellMethod::Anm { order, eps, pade } => {
                 s.solver.order = *order;
                 s.solver.eps = *eps;
                 s.solver.pade = *pade;
-                s.newton = None;
+                s.method = Method::Anm;
             }
             ShellMethod::Newton {
                 control,
                 max_step,
                 tol,
             } => {
-                s.newton = Some(NewtonConfig {
+                s.method = Method::Newton(NewtonConfig {
                     control: *control,
                     initial_step: max_step.min(0.01),
                     max_step: *max_step,
@@ -187,9 +188,13 @@ fn complete(report: RunReport) -> Result<RunReport> {
     }
 }
 
-/// max over the grid of |uz_A - uz_A,ref| / max |uz_A,ref|; infinite when
-/// the run did not reach the end of the grid.
+/// max over the grid of |q - q_ref| / max |q_ref| for the key probe q (the
+/// first probe, column 1); infinite when the run did not reach the end of
+/// the grid.
 pub fn uz_error(run: &RunReport, reference: &RunReport) -> f64 {
+    if reference.columns.len() < 2 {
+        return f64::INFINITY;
+    }
     let scale = reference
         .history
         .iter()
@@ -370,7 +375,8 @@ pub struct SkipRow {
     pub mean_contact_terms: f64,
     pub steps: usize,
     pub wall_s: f64,
-    pub uz_a_end: f64,
+    /// The key probe at the last history row.
+    pub key_end: f64,
 }
 
 /// Measures what skipping saves on a shell scene (ANM, scene settings):
@@ -386,11 +392,13 @@ pub fn skip_study(scene: &ShellScene, out_dir: &std::path::Path) -> Result<Vec<S
     };
     let lean = base.configure(scene);
     let mut all_active = lean.clone();
-    all_active.search_distance = 1e6;
+    if let Some(c) = all_active.contact.as_mut() {
+        c.search_distance = 1e6;
+    }
     let mut outputs = lean.clone();
-    outputs.plot = true;
+    outputs.output.plot = true;
     let mut every = outputs.clone();
-    every.vtk_every = 1;
+    every.output.vtk_every = 1;
     let runs: [(&'static str, &ShellScene, Option<std::path::PathBuf>); 4] = [
         (
             "candidates within search_distance (where the skip bound allows), no files",
@@ -420,7 +428,7 @@ pub fn skip_study(scene: &ShellScene, out_dir: &std::path::Path) -> Result<Vec<S
             mean_contact_terms: r.mean_active_contacts.unwrap_or(f64::NAN),
             steps: r.steps,
             wall_s: r.wall_s,
-            uz_a_end: r.uz_a_end,
+            key_end: r.history.last().and_then(|row| row.get(1)).copied().unwrap_or(f64::NAN),
         });
     }
     Ok(rows)
@@ -428,7 +436,7 @@ pub fn skip_study(scene: &ShellScene, out_dir: &std::path::Path) -> Result<Vec<S
 
 pub fn skip_markdown(rows: &[SkipRow]) -> String {
     let mut s = String::from(
-        "\nSkip what a scene doesn't need (ANM, scene settings):\n\n| variant | unknowns | velocity unknowns | contact candidates | contact terms per step (mean) | steps | wall (s) | uz_A(end) |\n|---|---|---|---|---|---|---|---|\n",
+        "\nSkip what a scene doesn't need (ANM, scene settings):\n\n| variant | unknowns | velocity unknowns | contact candidates | contact terms per step (mean) | steps | wall (s) | key probe (end) |\n|---|---|---|---|---|---|---|---|\n",
     );
     for r in rows {
         s += &format!(
@@ -440,7 +448,7 @@ pub fn skip_markdown(rows: &[SkipRow]) -> String {
             r.mean_contact_terms,
             r.steps,
             r.wall_s,
-            r.uz_a_end
+            r.key_end
         );
     }
     s

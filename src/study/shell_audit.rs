@@ -1,25 +1,26 @@
-//! The regularization audit of the plate-cylinder scene: how much eta and K
-//! (eq. 3) bend uz_A and the total contact force, and what they cost.
+//! The regularization audit of a shell scene with contact: how much eta and
+//! K (eq. 3) bend the scene's key probe (its first) and its total contact
+//! force (its first `contact_rn` probe over all nodes), and what they cost.
 //!
 //! Each of eta and K is swept alone around the scene's values (runs in
-//! parallel). For every run: uz_A and rn_total at lambda = 1, their deviation
+//! parallel). For every run: both probes at lambda_end, their deviation
 //! from the least regularized run of the sweep (smallest eta, largest K),
-//! the deviation of the whole uz_A trajectory on the lambda grid, the checks
-//! of [`super::shell_check`] (full residual with every candidate active,
-//! vertical equilibrium at lambda = 1) and the cost. omega and zeta are
+//! the deviation of the whole key-probe trajectory on the lambda grid, the
+//! checks of [`super::shell_check`] (full residual with every candidate
+//! active, global equilibrium at lambda_end) and the cost. omega and zeta are
 //! friction regularizations: the shell is frictionless, they are rejected.
 
 use super::audit::Sweeps;
 use super::pool;
 use super::shell_check::{ShellCheck, check, with_grid_snapshots};
 use crate::error::{Error, Result};
-use crate::model::plate_cylinder::{RunReport, run_loaded};
+use crate::run::{RunReport, run_loaded};
 use crate::output::create_dir;
 use crate::output::plot::{Curve, Panel, draw};
 use crate::scene::shell::ShellScene;
 use std::path::Path;
 
-/// One audited plate-cylinder run.
+/// One audited shell run.
 #[derive(Clone, Debug)]
 pub struct ShellAuditRow {
     pub parameter: &'static str,
@@ -28,15 +29,15 @@ pub struct ShellAuditRow {
     pub lambda_stop: f64,
     /// Diagnosis of a stop other than the end.
     pub message: Option<String>,
-    /// uz_A at lambda = 1 (NaN if not reached), m.
-    pub uz_a: f64,
-    /// |uz_A - uz_A,ref| / |uz_A,ref| at lambda = 1.
-    pub uz_a_deviation: f64,
-    /// rn_total at lambda = 1 (sum of the nodal reactions R), N.
-    pub rn_total: f64,
-    pub rn_total_deviation: f64,
+    /// The key probe at lambda_end (NaN if not reached).
+    pub key: f64,
+    /// |key - key_ref| / |key_ref| at lambda_end.
+    pub key_deviation: f64,
+    /// The total contact probe at lambda_end (sum of the nodal reactions R), N.
+    pub contact: f64,
+    pub contact_deviation: f64,
     /// max over the lambda grid (the part both runs reached) of
-    /// |uz_A - uz_A,ref| / max |uz_A,ref|.
+    /// |key - key_ref| / max |key_ref|.
     pub trajectory_deviation: f64,
     /// What the deviations are measured from.
     pub reference: String,
@@ -56,9 +57,10 @@ fn smallest_gap(scene: &ShellScene) -> f64 {
         .iter()
         .flat_map(|ob| {
             scene
-                .contact_nodes
+                .contact
                 .iter()
-                .filter_map(|&n| ob.gap(&scene.mesh.nodes[n]).map(|g| g.h))
+                .flat_map(|c| c.nodes.iter())
+                .filter_map(|&n| ob.shape.gap(&scene.mesh.nodes[n]).map(|g| g.h))
         })
         .filter(|h| *h > 0.0)
         .fold(f64::INFINITY, f64::min)
@@ -75,32 +77,51 @@ pub fn with_parameter(scene: &ShellScene, parameter: &str, value: f64) -> Result
     };
     if matches!(parameter, "omega" | "zeta") {
         return Err(bad(format!(
-            "plate-cylinder contact is frictionless: {parameter} regularizes the friction law (eq. {}) and has nothing to act on; sweep --eta or --penalty",
+            "shell contact is frictionless: {parameter} regularizes the friction law (eq. {}) and has nothing to act on; sweep --eta or --penalty",
             if parameter == "omega" { 6 } else { 11 }
         )));
     }
     if !(value.is_finite() && value > 0.0) {
         return Err(bad(format!("values must be finite and > 0, got {value}")));
     }
-    if scene.contact_nodes.is_empty() {
-        return Err(bad("the scene has no contact law ([contact])".into()));
-    }
     let mut s = scene.clone();
+    let Some(ct) = s.contact.as_mut() else {
+        return Err(bad("the scene has no contact law ([contact])".into()));
+    };
     match parameter {
-        "eta" => s.contact_eta = value,
-        "penalty" => s.contact_k = value,
+        "eta" => ct.eta = value,
+        "penalty" => ct.k = value,
         _ => return Err(bad("unknown parameter".into())),
     }
+    let (eta, k) = (ct.eta, ct.k);
     let delta = smallest_gap(&s);
-    if s.contact_eta >= s.contact_k * delta {
+    if eta >= k * delta {
         return Err(bad(format!(
-            "eta = {:e} must stay below K delta = {:e} (K = {:e} N/m, smallest initial gap delta = {delta:e} m)",
-            s.contact_eta,
-            s.contact_k * delta,
-            s.contact_k
+            "eta = {eta:e} must stay below K delta = {:e} (K = {k:e} N/m, smallest initial gap delta = {delta:e} m)",
+            k * delta
         )));
     }
     Ok(s)
+}
+
+/// History columns of the key probe and of the total contact probe; an
+/// error naming the scene when it has neither.
+pub fn key_columns(scene: &ShellScene) -> Result<(usize, usize)> {
+    let missing = |what: &str| Error::Invalid {
+        file: scene.file.clone(),
+        key: "probe".into(),
+        problem: format!("the study needs {what}"),
+    };
+    let key = scene
+        .key_probe()
+        .ok_or_else(|| missing("at least one [[probe]] (the first is the key output)"))?;
+    let contact = scene.total_contact_probe().ok_or_else(|| {
+        missing("a [[probe]] with quantity = \"contact_rn\" and no point, group or obstacle (the total contact force)")
+    })?;
+    Ok((
+        scene.column(&key.name).expect("probe column"),
+        scene.column(&contact.name).expect("probe column"),
+    ))
 }
 
 /// Runs the eta and penalty sweeps (in parallel) and returns one row per run.
@@ -153,26 +174,28 @@ pub fn audit(scene: &ShellScene, sweeps: &Sweeps) -> Result<Vec<ShellAuditRow>> 
                 }
             })
             .expect("non-empty");
+        let (key_col, contact_col) = key_columns(scene)?;
+        let end = scene.solver.lambda_end;
         let at_end = |r: &RunReport, col: usize| {
             r.history
                 .iter()
-                .find(|row| (row[0] - 1.0).abs() < 1e-9)
+                .find(|row| (row[0] - end).abs() < 1e-9)
                 .map_or(f64::NAN, |row| row[col])
         };
-        let (uz_ref, rn_ref) = (at_end(reference, 1), at_end(reference, 6));
+        let (uz_ref, rn_ref) = (at_end(reference, key_col), at_end(reference, contact_col));
         let scale = reference
             .history
             .iter()
-            .map(|r| r[1].abs())
+            .map(|r| r[key_col].abs())
             .fold(0.0, f64::max)
             .max(f64::MIN_POSITIVE);
         let label = if name == "penalty" { "K" } else { "eta" };
         for (v, r, c) in group {
-            let (uz, rn) = (at_end(r, 1), at_end(r, 6));
+            let (uz, rn) = (at_end(r, key_col), at_end(r, contact_col));
             let mut traj: f64 = 0.0;
             for (a, b) in r.history.iter().zip(&reference.history) {
                 debug_assert!((a[0] - b[0]).abs() < 1e-9);
-                traj = traj.max((a[1] - b[1]).abs() / scale);
+                traj = traj.max((a[key_col] - b[key_col]).abs() / scale);
             }
             if r.history.is_empty() {
                 traj = f64::NAN;
@@ -183,10 +206,10 @@ pub fn audit(scene: &ShellScene, sweeps: &Sweeps) -> Result<Vec<ShellAuditRow>> 
                 stop: r.stop.reason.clone(),
                 lambda_stop: r.stop.lambda.unwrap_or(f64::NAN),
                 message: r.stop.message.clone(),
-                uz_a: uz,
-                uz_a_deviation: (uz - uz_ref).abs() / uz_ref.abs(),
-                rn_total: rn,
-                rn_total_deviation: (rn - rn_ref).abs() / rn_ref.abs(),
+                key: uz,
+                key_deviation: (uz - uz_ref).abs() / uz_ref.abs(),
+                contact: rn,
+                contact_deviation: (rn - rn_ref).abs() / rn_ref.abs(),
                 trajectory_deviation: traj,
                 reference: format!("run with {label} = {ref_value:e}"),
                 check: c.clone(),
@@ -206,10 +229,10 @@ const HEADER: [&str; 22] = [
     "value",
     "stop",
     "lambda_stop",
-    "uz_A",
-    "uz_A_deviation",
-    "rn_total",
-    "rn_total_deviation",
+    "key",
+    "key_deviation",
+    "contact",
+    "contact_deviation",
     "trajectory_deviation",
     "contact_fx",
     "contact_fz",
@@ -230,15 +253,26 @@ fn opt(v: Option<f64>) -> f64 {
     v.unwrap_or(f64::NAN)
 }
 
+/// Names of the key and total-contact probes (for headers).
+fn names(scene: &ShellScene) -> (String, String) {
+    (
+        scene.key_probe().map_or("key".into(), |p| p.name.clone()),
+        scene
+            .total_contact_probe()
+            .map_or("contact".into(), |p| p.name.clone()),
+    )
+}
+
 /// The table as Markdown.
 pub fn markdown(scene: &ShellScene, rows: &[ShellAuditRow]) -> String {
+    let (eta, k) = scene.contact.as_ref().map_or((f64::NAN, f64::NAN), |c| (c.eta, c.k));
+    let (key, contact) = names(scene);
+    let end = scene.solver.lambda_end;
     let mut s = format!(
-        "Regularization audit of `{}` (plate-cylinder; scene eta = {:e} N, K = {:e} N/m; deviations from the least regularized run of each sweep)\n\n",
+        "Regularization audit of `{}` (scene eta = {eta:e} N, K = {k:e} N/m; deviations from the least regularized run of each sweep)\n\n",
         scene.file.display(),
-        scene.contact_eta,
-        scene.contact_k
     );
-    s += "| parameter | value | stop | lambda | uz_A(1) (m) | deviation | rn_total(1) (N) | deviation | trajectory deviation | contact Fx, Fz (N) | clamp Fx, Fz (N) | abs(P + C + S)/abs(P) | max abs(R)/abs(F) | far nodes | steps | factorizations | wall (s) | reference |\n";
+    s += &format!("| parameter | value | stop | lambda | {key}({end}) | deviation | {contact}({end}) (N) | deviation | trajectory deviation | contact Fx, Fz (N) | support Fx, Fz (N) | abs(P + C + S)/abs(P) | max abs(R)/abs(F) | far nodes | steps | factorizations | wall (s) | reference |\n");
     s += "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
     for r in rows {
         s += &format!(
@@ -247,10 +281,10 @@ pub fn markdown(scene: &ShellScene, rows: &[ShellAuditRow]) -> String {
             r.value,
             r.stop,
             r.lambda_stop,
-            r.uz_a,
-            r.uz_a_deviation,
-            r.rn_total,
-            r.rn_total_deviation,
+            r.key,
+            r.key_deviation,
+            r.contact,
+            r.contact_deviation,
             r.trajectory_deviation,
             opt(r.check.contact_force.map(|f| f[0])),
             opt(r.check.contact_force.map(|f| f[2])),
@@ -296,10 +330,10 @@ pub fn write(scene: &ShellScene, rows: &[ShellAuditRow], dir: &Path) -> Result<(
             format!("{:e}", r.value),
             r.stop.clone(),
             format!("{:e}", r.lambda_stop),
-            format!("{:.17e}", r.uz_a),
-            format!("{:e}", r.uz_a_deviation),
-            format!("{:.17e}", r.rn_total),
-            format!("{:e}", r.rn_total_deviation),
+            format!("{:.17e}", r.key),
+            format!("{:e}", r.key_deviation),
+            format!("{:.17e}", r.contact),
+            format!("{:e}", r.contact_deviation),
             format!("{:e}", r.trajectory_deviation),
             format!("{:e}", opt(r.check.contact_force.map(|f| f[0]))),
             format!("{:e}", opt(r.check.contact_force.map(|f| f[2]))),
@@ -320,6 +354,19 @@ pub fn write(scene: &ShellScene, rows: &[ShellAuditRow], dir: &Path) -> Result<(
     w.flush().map_err(io)?;
     std::fs::write(dir.join("audit.md"), markdown(scene, rows)).map_err(io)?;
     let mut panels = vec![];
+    let stem = scene
+        .file
+        .file_stem()
+        .map(|s| s.to_string_lossy().to_string())
+        .unwrap_or_default();
+    let (key, contact) = names(scene);
+    let labels = [
+        format!("{key}(end)"),
+        format!("{contact}(end)"),
+        format!("{key} trajectory (max over lambda)"),
+        "steps".to_string(),
+        "factorizations".to_string(),
+    ];
     let titles: Vec<(String, String, &str)> = ["eta", "penalty"]
         .into_iter()
         .filter(|p| rows.iter().any(|r| r.parameter == *p))
@@ -330,8 +377,8 @@ pub fn write(scene: &ShellScene, rows: &[ShellAuditRow], dir: &Path) -> Result<(
                 ("eta", "eta (N)")
             };
             (
-                format!("plate-cylinder: deviation from the least regularized run, {name} swept"),
-                format!("plate-cylinder: cost, {name} swept"),
+                format!("{stem}: deviation from the least regularized run, {name} swept"),
+                format!("{stem}: cost, {name} swept"),
                 unit,
             )
         })
@@ -341,8 +388,8 @@ pub fn write(scene: &ShellScene, rows: &[ShellAuditRow], dir: &Path) -> Result<(
         .filter(|p| rows.iter().any(|r| r.parameter == *p))
         .zip(&titles)
     {
-        let curve = |label: &'static str, f: &dyn Fn(&ShellAuditRow) -> f64| Curve {
-            label,
+        let curve = |k: usize, f: &dyn Fn(&ShellAuditRow) -> f64| Curve {
+            label: &labels[k],
             points: rows
                 .iter()
                 .filter(|r| r.parameter == p)
@@ -354,11 +401,9 @@ pub fn write(scene: &ShellScene, rows: &[ShellAuditRow], dir: &Path) -> Result<(
             x_label: unit,
             y_label: "relative deviation",
             curves: vec![
-                curve("uz_A(1)", &|r| r.uz_a_deviation),
-                curve("rn_total(1)", &|r| r.rn_total_deviation),
-                curve("uz_A trajectory (max over lambda)", &|r| {
-                    r.trajectory_deviation
-                }),
+                curve(0, &|r| r.key_deviation),
+                curve(1, &|r| r.contact_deviation),
+                curve(2, &|r| r.trajectory_deviation),
             ],
             log: (true, true),
         });
@@ -367,8 +412,8 @@ pub fn write(scene: &ShellScene, rows: &[ShellAuditRow], dir: &Path) -> Result<(
             x_label: unit,
             y_label: "count",
             curves: vec![
-                curve("steps", &|r| r.steps as f64),
-                curve("factorizations", &|r| r.factorizations as f64),
+                curve(3, &|r| r.steps as f64),
+                curve(4, &|r| r.factorizations as f64),
             ],
             log: (true, false),
         });
@@ -397,9 +442,11 @@ mod tests {
     fn parameters_apply_and_bad_values_are_rejected_by_name() {
         let sc = scene();
         let s = with_parameter(&sc, "eta", 1e-3).unwrap();
-        assert_eq!((s.contact_eta, s.contact_k), (1e-3, sc.contact_k));
+        let (c, c0) = (s.contact.unwrap(), sc.contact.clone().unwrap());
+        assert_eq!((c.eta, c.k), (1e-3, c0.k));
         let s = with_parameter(&sc, "penalty", 1e6).unwrap();
-        assert_eq!((s.contact_eta, s.contact_k), (sc.contact_eta, 1e6));
+        let c = s.contact.unwrap();
+        assert_eq!((c.eta, c.k), (c0.eta, 1e6));
         for p in ["omega", "zeta"] {
             let (key, problem) = invalid(with_parameter(&sc, p, 0.1));
             assert_eq!(key, format!("--{p}"));

@@ -1,23 +1,26 @@
-//! Checks of a plate-cylinder run against the equations it claims to solve,
+//! Checks of a shell run against the equations it claims to solve,
 //! from its output only (the mid-surface snapshots: the state per node, and
 //! the contact forces the run reports):
 //! - the full residual |R(U, lambda)| / |F| over the free dofs, re-evaluated
 //!   on a freshly built model in which *every* candidate node carries the
 //!   contact law (eq. 3): the stated problem, not the truncated one the run
 //!   solved (DESIGN §3), so the pulls of skipped nodes count;
-//! - the global equilibrium of the strip at lambda = 1: applied load P +
-//!   resultant C of the reported contact forces + clamp reaction S = 0. The
-//!   clamp reaction is the one figure not in the output: it is taken from the
-//!   element internal forces at the clamped nodes (S = f_int there, since the
-//!   internal forces of the whole strip sum to zero). The check therefore
-//!   rests on the element's translation invariance and ties the reported
-//!   contact forces to the load; it is not independent of the shell model.
-//!   The clamp reaction is not small: the span between the clamp and the
-//!   cylinder sags (2.5 cm at lambda = 1) and carries the belt tension, so
-//!   C_z differs from -P_z by 8% and C_x is about 29 N.
+//! - the global equilibrium at lambda_end: applied load P + resultant C of
+//!   the reported contact forces + support reaction S = 0. The support
+//!   reaction is the one figure not in the output: it is taken from the
+//!   element internal forces at the fixed displacement dofs (S = f_int there,
+//!   since the internal forces of the whole shell sum to zero). The check
+//!   therefore rests on the element's translation invariance and ties the
+//!   reported contact forces to the load; it is not independent of the shell
+//!   model. On plate-cylinder the clamp reaction is not small: the span
+//!   between the clamp and the cylinder sags (2.5 cm at lambda = 1) and
+//!   carries the belt tension, so C_z differs from -P_z by 8% and C_x is
+//!   about 29 N.
 
 use crate::error::Result;
-use crate::model::plate_cylinder::{RunReport, build_model, load_norm};
+use crate::fe::dof::{Component, Dof};
+use crate::run::RunReport;
+use crate::run::build::{build_model, load_norm};
 use crate::scene::shell::ShellScene;
 use crate::shell::ShellModel;
 
@@ -32,13 +35,13 @@ pub struct ShellCheck {
     pub worst_lambda: f64,
     /// How many points were checked (snapshots of the run).
     pub points: usize,
-    /// At lambda = 1 (None when the run did not reach it): resultant C of
+    /// At lambda_end (None when the run did not reach it): resultant C of
     /// the reported contact forces (N).
     pub contact_force: Option<[f64; 3]>,
-    /// At lambda = 1: clamp reaction S, the internal forces at the clamped
-    /// nodes (N).
+    /// At lambda_end: support reaction S, the internal forces at the fixed
+    /// displacement dofs (N).
     pub clamp_force: Option<[f64; 3]>,
-    /// At lambda = 1: |P + C + S| / |P|, P the applied load.
+    /// At lambda_end: |P + C + S| / |P|, P the applied load.
     pub balance: Option<f64>,
 }
 
@@ -46,8 +49,9 @@ pub struct ShellCheck {
 /// solver.lambda_end, so that [`check`] sees every grid point.
 pub fn with_grid_snapshots(scene: &ShellScene) -> ShellScene {
     let mut s = scene.clone();
-    let n = (s.solver.lambda_end / s.lambda_step + 1e-9).floor() as usize;
-    s.snapshots = (1..=n).map(|i| i as f64 * s.lambda_step).collect();
+    let step = s.output.lambda_step * s.solver.lambda_end.signum();
+    let n = (s.solver.lambda_end / step + 1e-9).floor() as usize;
+    s.output.snapshots = (1..=n).map(|i| i as f64 * step).collect();
     s
 }
 
@@ -56,7 +60,7 @@ fn relative_residual(model: &mut ShellModel, full: &[f64], lambda: f64, f_norm: 
     if full.iter().any(|x| !x.is_finite()) {
         return f64::INFINITY;
     }
-    model.update_active(full);
+    model.update_active(full, lambda);
     match model.residual_full(full, lambda) {
         Ok(r) => {
             let n = r
@@ -103,22 +107,38 @@ pub fn check(scene: &ShellScene, report: &RunReport) -> Result<ShellCheck> {
     if let Some(end) = report
         .snapshots
         .iter()
-        .find(|s| (s.lambda - 1.0).abs() < 1e-9)
+        .find(|s| (s.lambda - scene.solver.lambda_end).abs() < 1e-9)
     {
         let full = &end.state;
         // Internal forces alone: no load, no contact.
         let mut bare = build_model(scene)?;
         bare.dead.iter_mut().for_each(|x| *x = 0.0);
+        bare.follower.clear();
+        bare.pressures.clear();
         bare.pairs.clear();
-        bare.update_active(full);
+        bare.update_active(full, end.lambda);
         let f_int = bare.residual_full(full, end.lambda)?;
+        // Applied loads alone (dead, follower): no elements, no contact.
+        let mut loads = build_model(scene)?;
+        loads.elements.clear();
+        loads.pairs.clear();
+        loads.update_active(full, end.lambda);
+        let f_ext = loads.residual_full(full, end.lambda)?;
         let mut p = [0.0; 3];
         let mut c = [0.0; 3];
         let mut clamp = [0.0; 3];
         for k in 0..3 {
-            p[k] = scene.loads.iter().map(|l| l.force[k]).sum::<f64>() * end.lambda;
+            let comp = Component::DISPLACEMENT[k];
+            p[k] = -(0..model.n_nodes())
+                .map(|n| f_ext[Dof::new(n, comp).index()])
+                .sum::<f64>();
             c[k] = end.force.iter().map(|f| f[k]).sum();
-            clamp[k] = scene.clamped.iter().map(|&n| f_int[6 * n + k]).sum();
+            clamp[k] = scene
+                .fixed
+                .keys()
+                .filter(|d| d.component == comp)
+                .map(|d| f_int[d.index()])
+                .sum();
         }
         let norm3 = |v: [f64; 3]| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
         let sum = [

@@ -18,7 +18,7 @@ use super::check::max_relative_residual;
 use super::pool;
 use super::shell_check::{check, with_grid_snapshots};
 use crate::model::friction_run::run;
-use crate::model::plate_cylinder::run_loaded;
+use crate::run::run_loaded;
 use crate::scene::Kind;
 use crate::scene::friction::FrictionScene;
 use crate::scene::shell::ShellScene;
@@ -180,8 +180,8 @@ pub fn shell_axes() -> Vec<(&'static str, Vec<f64>)> {
 fn apply_shell(scene: &ShellScene, axis: &str, value: f64) -> Option<ShellScene> {
     let mut s = scene.clone();
     match axis {
-        "eta" => s.contact_eta = value,
-        "K" => s.contact_k = value,
+        "eta" => s.contact.as_mut()?.eta = value,
+        "K" => s.contact.as_mut()?.k = value,
         "order" => s.solver.order = value as usize,
         _ => return None,
     }
@@ -205,8 +205,8 @@ pub fn stress_shell(
                 };
                 s.solver.max_steps = s.solver.max_steps.min(max_steps);
                 let at_scene_values = match *axis {
-                    "eta" => v == sc.contact_eta,
-                    "K" => v == sc.contact_k,
+                    "eta" => sc.contact.as_ref().is_some_and(|c| v == c.eta),
+                    "K" => sc.contact.as_ref().is_some_and(|c| v == c.k),
                     _ => true,
                 };
                 let uz_ref = canonical_uz_a(name).filter(|_| at_scene_values);
@@ -247,10 +247,9 @@ pub fn stress_shell(
                 detail: String::new(),
             },
             Ok(Ok((run, c))) => {
-                let finite = run.history.iter().flatten().all(|x| x.is_finite())
-                    && run.uz_a_end.is_finite();
+                let finite = run.history.iter().flatten().all(|x| x.is_finite());
                 let normal = run.stop.reason == "end";
-                let uz1 = run.uz_at(1.0);
+                let uz1 = run.value_at("uz_A", 1.0);
                 let mut problems = vec![];
                 if !finite {
                     problems.push("non-finite value in the output".to_string());

@@ -56,7 +56,7 @@ pub fn linear(m: &mut ShellModel) -> Vec<f64> {
         u.iter().all(|x| x.is_finite()),
         "non-finite linear solution"
     );
-    m.expand(&u)
+    m.expand(&u, 1.0)
 }
 
 /// Fixes the given components (0..3 v, 3..6 w) at every node of `nodes`.

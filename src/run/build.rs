@@ -1,0 +1,222 @@
+//! A shell scene assembled into the problem the engine continues: elements,
+//! essential conditions with their values per unit lambda, loads, obstacles
+//! with their motion and the contact candidates (DESIGN §1, §3).
+
+use crate::contact::search;
+use crate::error::{Error, Result};
+use crate::fe::dof::{Component, Dof, PER_NODE};
+use crate::fe::{edge_load, surface_load};
+use crate::mesh::Vec3;
+use crate::scene::shell::{Load, ShellScene};
+use crate::shell::model::FollowerPressure;
+use crate::shell::{FollowerCouple, ShellModel};
+use nalgebra::{Matrix6, SymmetricEigen};
+
+/// Builds the shell model of a scene. Errors name the scene key at fault: an
+/// inverted element (mesh file and line), a contact node that starts inside
+/// an obstacle, fixes that leave a rigid-body motion free.
+pub fn build_model(scene: &ShellScene) -> Result<ShellModel> {
+    let mut m = ShellModel::new(
+        scene.mesh.nodes.clone(),
+        scene.directors.clone(),
+        &scene.mesh.quads,
+        scene.thickness,
+        scene.material,
+    )
+    .map_err(|e| match e {
+        Error::Element { element, problem } => Error::Mesh {
+            file: scene.mesh.file.clone(),
+            line: scene.mesh.quad_lines[element],
+            problem: format!("element {}: {problem}", scene.mesh.quad_tags[element]),
+        },
+        other => other,
+    })?;
+    let fixed: Vec<(usize, usize)> = scene
+        .fixed
+        .keys()
+        .map(|d| (d.node, d.component.offset()))
+        .collect();
+    m.set_constraints(&fixed);
+    let mut prescribed = vec![0.0; PER_NODE * m.n_nodes()];
+    for (d, v) in &scene.fixed {
+        prescribed[d.index()] = *v;
+    }
+    m.set_prescribed(prescribed);
+    let add = |dead: &mut [f64], node: usize, f: Vec3| {
+        for (k, c) in Component::DISPLACEMENT.into_iter().enumerate() {
+            dead[Dof::new(node, c).index()] += f[k];
+        }
+    };
+    let x0 = &scene.mesh.nodes;
+    let quad_x = |q: usize| -> [Vec3; 4] { scene.mesh.quads[q].map(|n| x0[n]) };
+    for load in &scene.loads {
+        match load {
+            Load::Nodal { nodes, force } => {
+                for &n in nodes {
+                    add(&mut m.dead, n, *force);
+                }
+            }
+            Load::Moment { nodes, moment } => {
+                for &n in nodes {
+                    m.follower.push(FollowerCouple {
+                        node: n,
+                        moment: *moment,
+                    });
+                }
+            }
+            Load::Line { edges, force } => {
+                for e in edges {
+                    let f = edge_load::line_load_forces(*force, x0[e[0]], x0[e[1]]);
+                    add(&mut m.dead, e[0], f[0]);
+                    add(&mut m.dead, e[1], f[1]);
+                }
+            }
+            Load::Traction { quads, traction } => {
+                for &q in quads {
+                    let f = surface_load::dead_traction_forces(*traction, &quad_x(q));
+                    for (i, &n) in scene.mesh.quads[q].iter().enumerate() {
+                        add(&mut m.dead, n, f[i]);
+                    }
+                }
+            }
+            Load::Pressure {
+                quads,
+                pressure,
+                follower,
+            } => {
+                for &q in quads {
+                    if *follower {
+                        m.pressures.push(FollowerPressure {
+                            nodes: scene.mesh.quads[q],
+                            pressure: *pressure,
+                        });
+                    } else {
+                        let f = surface_load::dead_pressure_forces(*pressure, &quad_x(q));
+                        for (i, &n) in scene.mesh.quads[q].iter().enumerate() {
+                            add(&mut m.dead, n, f[i]);
+                        }
+                    }
+                }
+            }
+        }
+    }
+    if let Some(ct) = &scene.contact {
+        let shapes = scene.obstacles.iter().map(|o| o.shape.clone()).collect();
+        m.set_contact(shapes, &ct.nodes, ct.k, ct.eta, ct.search_distance)
+            .map_err(|(node, ob, h0)| Error::Invalid {
+                file: scene.file.clone(),
+                key: format!("obstacle[{ob}]"),
+                problem: format!(
+                    "contact node {} at {:?} has initial gap {h0:e}: eq. (3) needs delta = h0 > 0 (the node starts on or inside the obstacle)",
+                    node + 1,
+                    scene.mesh.nodes[node].as_slice()
+                ),
+            })?;
+        m.set_motions(scene.obstacles.iter().map(|o| o.motion).collect());
+        if !far_nodes_may_be_skipped(&m, scene.solver.residual_tol) {
+            m.search_distance = f64::INFINITY;
+            let rest = vec![0.0; PER_NODE * m.n_nodes()];
+            m.update_active(&rest, 0.0);
+        }
+    } else {
+        check_rigid_modes(scene)?;
+    }
+    Ok(m)
+}
+
+/// |F|: the 2-norm of the dead load pattern on the free dofs (N), the scale
+/// of the residual test |R| / |F| <= solver.residual_tol.
+pub fn load_norm(m: &ShellModel) -> f64 {
+    m.dead
+        .iter()
+        .zip(&m.free)
+        .filter(|(_, f)| f.is_some())
+        .map(|(x, _)| x * x)
+        .sum::<f64>()
+        .sqrt()
+}
+
+/// DESIGN §3: far candidates may be left out of the active set only where
+/// their forces are below the accuracy asked for. A pair left out at gap
+/// h >= s (the search distance) carries at most
+/// [`search::skipped_force_bound`] (a pull of up to eta, or a push of about
+/// eta (delta − h) / h for a node that started farther than s); skipping is
+/// allowed while the 2-norm of those bounds stays within
+/// solver.residual_tol |F|. Otherwise every candidate carries its term.
+pub fn far_nodes_may_be_skipped(m: &ShellModel, residual_tol: f64) -> bool {
+    let bound = m
+        .pairs
+        .iter()
+        .map(|p| search::skipped_force_bound(p, m.search_distance).powi(2))
+        .sum::<f64>()
+        .sqrt();
+    bound <= residual_tol * load_norm(m)
+}
+
+/// Fixes must hold every rigid-body motion of the shell (no contact to do
+/// it). A rigid motion (translation t, rotation ω about the mesh centroid c)
+/// moves node n by t + ω × (X_n − c) and turns its director by ω × A3; it is
+/// free when it moves no fixed dof. The free ones are the null space of the
+/// 6 × 6 Gram matrix of the fixed rows of the six modes.
+fn check_rigid_modes(scene: &ShellScene) -> Result<()> {
+    let x0 = &scene.mesh.nodes;
+    let c = x0.iter().fold(Vec3::zeros(), |a, x| a + x) / x0.len() as f64;
+    let size = scene.mesh.size();
+    let mut g = Matrix6::<f64>::zeros();
+    for d in scene.fixed.keys() {
+        let k = d.component.offset() % 3;
+        let mut row = [0.0; 6];
+        for (j, r) in row.iter_mut().enumerate() {
+            let mut e = Vec3::zeros();
+            e[j % 3] = 1.0;
+            let motion = if d.component.is_displacement() {
+                if j < 3 { e } else { e.cross(&(x0[d.node] - c)) / size }
+            } else if j < 3 {
+                Vec3::zeros()
+            } else {
+                e.cross(&scene.directors[d.node])
+            };
+            *r = motion[k];
+        }
+        for i in 0..6 {
+            for j in 0..6 {
+                g[(i, j)] += row[i] * row[j];
+            }
+        }
+    }
+    let eig = SymmetricEigen::new(g);
+    let top = eig.eigenvalues.max().max(1.0);
+    let mut free = vec![];
+    for (i, &l) in eig.eigenvalues.iter().enumerate() {
+        if l <= 1e-10 * top {
+            let v = eig.eigenvectors.column(i);
+            let clean = |x: f64| if x.abs() < 1e-9 { 0.0 } else { x };
+            let t = Vec3::new(clean(v[0]), clean(v[1]), clean(v[2]));
+            let w = Vec3::new(clean(v[3]), clean(v[4]), clean(v[5]));
+            free.push(if w.norm() < 1e-9 {
+                format!("translation along ({:.3}, {:.3}, {:.3})", t[0], t[1], t[2])
+            } else if t.norm() < 1e-9 {
+                format!(
+                    "rotation about the axis ({:.3}, {:.3}, {:.3}) through the mesh centroid ({:.4}, {:.4}, {:.4})",
+                    w[0], w[1], w[2], c[0], c[1], c[2]
+                )
+            } else {
+                format!(
+                    "rigid motion (translation ({:.3}, {:.3}, {:.3}), rotation ({:.3}, {:.3}, {:.3}) about the centroid)",
+                    t[0], t[1], t[2], w[0], w[1], w[2]
+                )
+            });
+        }
+    }
+    if free.is_empty() {
+        return Ok(());
+    }
+    Err(Error::Invalid {
+        file: scene.file.clone(),
+        key: "fix".into(),
+        problem: format!(
+            "the fixed dofs leave the shell free to move as a rigid body (singular stiffness): {}; fix more components ([[fix]] with clamp, symmetry, simply_supported or dofs)",
+            free.join("; ")
+        ),
+    })
+}

@@ -1,0 +1,18 @@
+//! Scene -> problem -> engine loop -> recorder (DESIGN §1).
+//!
+//! - [`build`]: a shell scene into the assembled [`crate::shell::ShellModel`];
+//! - [`probe`]: the scene's named outputs evaluated at a state;
+//! - [`recorder`]: the output grid, the streamed CSV files, VTK, the
+//!   checkpoint that `anm run --resume` continues from;
+//! - [`shell`]: the run loop (ANM stepper, Newton baseline, linear solve).
+//!
+//! A run stops at the next step end after Ctrl-C or SIGTERM
+//! ([`interrupt`]), with every file consistent with the last step.
+
+pub mod build;
+pub mod interrupt;
+pub mod probe;
+pub mod recorder;
+pub mod shell;
+
+pub use shell::{RunReport, Snapshot, run_loaded, run_scene};

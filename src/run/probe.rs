@@ -1,0 +1,134 @@
+//! The scene's probes evaluated at a state (one history.csv row), and the
+//! contact and reaction fields that the probes, VTK and HDF5 files share.
+
+use crate::error::Result;
+use crate::fe::dof::{Component, Dof, node_vector};
+use crate::mesh::Vec3;
+use crate::scene::shell::{Probe, Quantity};
+use crate::shell::ShellModel;
+
+/// A state on the path: the full vector (fixed dofs included), lambda and
+/// the scaled arclength from the start of the run.
+pub struct State<'a> {
+    pub full: &'a [f64],
+    pub lambda: f64,
+    pub arclength: f64,
+}
+
+/// Contact of one pair at a state.
+#[derive(Clone, Debug)]
+pub struct PairContact {
+    pub node: usize,
+    pub obstacle: usize,
+    pub gap: f64,
+    /// Normal reaction R (eq. 3), positive when the obstacle pushes.
+    pub r: f64,
+    pub normal: Vec3,
+}
+
+/// Contact reactions of every candidate pair at the state, by eq. (3) (the
+/// stated problem, including far candidates the model may skip while their
+/// forces stay below the residual tolerance, DESIGN §3).
+pub fn contacts(model: &ShellModel, full: &[f64], lambda: f64) -> Vec<PairContact> {
+    let x = model.positions(full);
+    let obstacles = model.obstacles_at(lambda);
+    model
+        .pairs
+        .iter()
+        .filter_map(|p| {
+            let g = obstacles[p.obstacle].gap(&x[p.node])?;
+            Some(PairContact {
+                node: p.node,
+                obstacle: p.obstacle,
+                gap: g.h,
+                r: p.law.force(g.h),
+                normal: g.n,
+            })
+        })
+        .collect()
+}
+
+/// Per node: normal reaction R summed over obstacles, and force Σ R n.
+pub fn nodal_contact(n_nodes: usize, contacts: &[PairContact]) -> (Vec<f64>, Vec<Vec3>) {
+    let mut r = vec![0.0; n_nodes];
+    let mut f = vec![Vec3::zeros(); n_nodes];
+    for c in contacts {
+        r[c.node] += c.r;
+        f[c.node] += c.normal * c.r;
+    }
+    (r, f)
+}
+
+/// One value per probe, in scene order.
+pub fn evaluate(model: &ShellModel, probes: &[Probe], s: &State) -> Result<Vec<f64>> {
+    let needs_contact = probes.iter().any(|p| {
+        matches!(
+            p.quantity,
+            Quantity::ContactNormal { .. }
+                | Quantity::ContactForce { .. }
+                | Quantity::MinGap { .. }
+                | Quantity::Contacts { .. }
+        )
+    });
+    let cont = if needs_contact {
+        contacts(model, s.full, s.lambda)
+    } else {
+        vec![]
+    };
+    let needs_residual = probes
+        .iter()
+        .any(|p| matches!(p.quantity, Quantity::Reaction { .. }));
+    let residual = if needs_residual {
+        // Support reactions: the residual f_int − f_ext at the fixed dofs.
+        model.residual_full(s.full, s.lambda)?
+    } else {
+        vec![]
+    };
+    let mean = |nodes: &[usize], f: &dyn Fn(usize) -> f64| {
+        nodes.iter().map(|&n| f(n)).sum::<f64>() / nodes.len() as f64
+    };
+    let selected = |c: &&PairContact, nodes: &Option<Vec<usize>>, obstacle: &Option<usize>| {
+        obstacle.is_none_or(|o| c.obstacle == o)
+            && nodes.as_ref().is_none_or(|ns| ns.binary_search(&c.node).is_ok())
+    };
+    Ok(probes
+        .iter()
+        .map(|p| match &p.quantity {
+            Quantity::Dof { nodes, component } => {
+                mean(nodes, &|n| s.full[Dof::new(n, *component).index()])
+            }
+            Quantity::Position { nodes, axis } => mean(nodes, &|n| {
+                model.x0[n][*axis] + node_vector(s.full, n, Component::DISPLACEMENT)[*axis]
+            }),
+            Quantity::Reaction { nodes, axis } => nodes
+                .iter()
+                .map(|&n| residual[Dof::new(n, Component::DISPLACEMENT[*axis]).index()])
+                .sum(),
+            Quantity::ContactNormal { nodes, obstacle } => cont
+                .iter()
+                .filter(|c| selected(c, nodes, obstacle))
+                .map(|c| c.r)
+                .sum(),
+            Quantity::ContactForce {
+                nodes,
+                obstacle,
+                axis,
+            } => cont
+                .iter()
+                .filter(|c| selected(c, nodes, obstacle))
+                .map(|c| c.r * c.normal[*axis])
+                .sum(),
+            Quantity::MinGap { obstacle } => cont
+                .iter()
+                .filter(|c| obstacle.is_none_or(|o| c.obstacle == o))
+                .map(|c| c.gap)
+                .fold(f64::INFINITY, f64::min),
+            Quantity::Contacts { obstacle } => cont
+                .iter()
+                .filter(|c| obstacle.is_none_or(|o| c.obstacle == o) && c.gap <= 0.0)
+                .count() as f64,
+            Quantity::Lambda => s.lambda,
+            Quantity::Arclength => s.arclength,
+        })
+        .collect())
+}

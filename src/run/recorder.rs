@@ -1,0 +1,338 @@
+//! The recorder owns what a run writes: the probes on the output grid
+//! (history.csv), the step log (steps.csv), both streamed and flushed at
+//! every step so that an interrupted run keeps every computed point; VTK
+//! snapshots with their .pvd index; the full fields at the snapshot lambdas
+//! (HDF5); and the checkpoint from which `anm run --resume` continues.
+
+use super::probe::{self, State};
+use crate::error::{Error, Result};
+use crate::fe::dof::{Component, node_vector};
+use crate::mesh::Vec3;
+use crate::output::vtk::{PointData, write_vtu};
+use crate::scene::shell::ShellScene;
+use crate::shell::ShellModel;
+use serde::{Deserialize, Serialize};
+use std::fs::{File, OpenOptions};
+use std::io::{BufRead, BufReader, Write};
+use std::path::{Path, PathBuf};
+
+/// The mid-surface at one lambda: per node, reference position,
+/// displacement, current director, normal reaction R and contact force R n,
+/// and the full state they are computed from.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct Snapshot {
+    pub lambda: f64,
+    pub x0: Vec<[f64; 3]>,
+    pub displacement: Vec<[f64; 3]>,
+    pub director: Vec<[f64; 3]>,
+    pub reaction: Vec<f64>,
+    pub force: Vec<[f64; 3]>,
+    /// 6 per node (fixed dofs included).
+    pub state: Vec<f64>,
+}
+
+impl Snapshot {
+    /// [x_lo, x_hi]: smallest and largest initial x of the nodes with R > threshold.
+    pub fn contact_zone(&self, threshold: f64) -> Option<(f64, f64)> {
+        let xs: Vec<f64> = self
+            .x0
+            .iter()
+            .zip(&self.reaction)
+            .filter(|(_, r)| **r > threshold)
+            .map(|(x, _)| x[0])
+            .collect();
+        (!xs.is_empty()).then(|| {
+            (
+                xs.iter().copied().fold(f64::INFINITY, f64::min),
+                xs.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+            )
+        })
+    }
+}
+
+/// One line of steps.csv.
+pub struct StepRow {
+    pub step: usize,
+    pub lambda_start: f64,
+    pub lambda_end: f64,
+    /// Step length in the scaled arclength (ANM), or the scaled chord (Newton).
+    pub length: f64,
+    pub pade: bool,
+    pub end_residual: f64,
+    pub geometric: bool,
+    pub factorizations: usize,
+    pub solves: usize,
+}
+
+const STEP_COLUMNS: [&str; 9] = [
+    "step",
+    "lambda_start",
+    "lambda_end",
+    "length",
+    "pade",
+    "end_residual",
+    "geometric",
+    "factorizations",
+    "solves",
+];
+
+/// What the recorder keeps between steps: written into the checkpoint.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+pub struct RecorderState {
+    /// Index k of the last grid value k·Δ recorded (None: nothing yet).
+    pub last_grid: Option<i64>,
+    pub history: Vec<Vec<f64>>,
+    pub steps_rows: usize,
+    pub pvd: Vec<(f64, usize, String)>,
+    pub snapshots: Vec<Snapshot>,
+    pub arclength: f64,
+    pub grid_corrections: usize,
+    pub grid_factorizations: usize,
+    pub skipped_pull_bound: f64,
+    pub active_sum: usize,
+    /// Wall time of the run before a resume.
+    pub wall_s_before: f64,
+}
+
+pub struct Recorder<'s> {
+    pub scene: &'s ShellScene,
+    pub dir: Option<PathBuf>,
+    pub columns: Vec<String>,
+    pub state: RecorderState,
+    history: Option<csv::Writer<File>>,
+    steps: Option<csv::Writer<File>>,
+}
+
+fn io_err(file: &Path) -> impl Fn(std::io::Error) -> Error + '_ {
+    move |source| Error::Io {
+        file: file.to_path_buf(),
+        source,
+    }
+}
+
+fn csv_err(file: &Path) -> impl Fn(csv::Error) -> Error + '_ {
+    move |e| Error::Output(format!("{}: {e}", file.display()))
+}
+
+/// Opens a streamed CSV: new with its header, or (resume) cut back to its
+/// header and first `keep` rows and appended to.
+fn open_csv(path: &Path, header: &[String], keep: Option<usize>) -> Result<csv::Writer<File>> {
+    if let Some(keep) = keep {
+        let f = File::open(path).map_err(io_err(path))?;
+        let lines: Vec<String> = BufReader::new(f)
+            .lines()
+            .take(keep + 1)
+            .collect::<std::io::Result<_>>()
+            .map_err(io_err(path))?;
+        if lines.len() != keep + 1 || lines[0] != header.join(",") {
+            return Err(Error::Output(format!(
+                "{}: does not match the checkpoint ({} rows expected with header `{}`): cannot resume",
+                path.display(),
+                keep,
+                header.join(",")
+            )));
+        }
+        let mut text = lines.join("\n");
+        text.push('\n');
+        std::fs::write(path, text).map_err(io_err(path))?;
+        let f = OpenOptions::new()
+            .append(true)
+            .open(path)
+            .map_err(io_err(path))?;
+        Ok(csv::Writer::from_writer(f))
+    } else {
+        let mut w = csv::Writer::from_path(path).map_err(csv_err(path))?;
+        w.write_record(header).map_err(csv_err(path))?;
+        w.flush().map_err(io_err(path))?;
+        Ok(w)
+    }
+}
+
+impl<'s> Recorder<'s> {
+    /// A recorder writing into `dir` (None: in memory only), fresh or
+    /// continuing `resumed`.
+    pub fn new(
+        scene: &'s ShellScene,
+        dir: Option<&Path>,
+        resumed: Option<RecorderState>,
+    ) -> Result<Self> {
+        let mut columns = vec!["lambda".to_string()];
+        columns.extend(scene.probes.iter().map(|p| p.name.clone()));
+        let (history, steps) = match dir {
+            Some(d) => {
+                crate::output::create_dir(d)?;
+                let keep = resumed.as_ref().map(|s| (s.history.len(), s.steps_rows));
+                let step_header: Vec<String> = STEP_COLUMNS.iter().map(|s| s.to_string()).collect();
+                (
+                    Some(open_csv(&d.join("history.csv"), &columns, keep.map(|k| k.0))?),
+                    Some(open_csv(&d.join("steps.csv"), &step_header, keep.map(|k| k.1))?),
+                )
+            }
+            None => (None, None),
+        };
+        Ok(Self {
+            scene,
+            dir: dir.map(Path::to_path_buf),
+            columns,
+            state: resumed.unwrap_or_default(),
+            history,
+            steps,
+        })
+    }
+
+    /// Signed grid step: multiples of output.lambda_step toward lambda_end.
+    pub fn grid_step(&self) -> f64 {
+        self.scene.output.lambda_step * self.scene.solver.lambda_end.signum()
+    }
+
+    /// Grid values crossed by a move from lambda a to lambda b (a excluded,
+    /// b included), in the order they are met.
+    pub fn grid_between(&self, a: f64, b: f64) -> Vec<f64> {
+        let d = self.grid_step();
+        let tol = 1e-12 * d.abs().max(1.0);
+        let end = self.scene.solver.lambda_end;
+        let mut out = vec![];
+        let ka = (a / d).floor() as i64 - 1;
+        let kb = (b / d).ceil() as i64 + 1;
+        let (lo, hi) = (ka.min(kb), ka.max(kb));
+        for k in lo..=hi {
+            let g = k as f64 * d;
+            let inside = if b >= a {
+                g > a + tol && g <= b + tol
+            } else {
+                g < a - tol && g >= b - tol
+            };
+            // Stay within [0, lambda_end] of the scene.
+            let in_range = g * end.signum() >= -tol && (g - end) * end.signum() <= tol;
+            if inside && in_range {
+                out.push(g);
+            }
+        }
+        if b < a {
+            out.reverse();
+        }
+        out
+    }
+
+    /// A history row at a state; a snapshot too when lambda is one of the
+    /// scene's snapshot values.
+    pub fn record(&mut self, model: &ShellModel, s: &State) -> Result<()> {
+        let mut row = vec![s.lambda];
+        row.extend(probe::evaluate(model, &self.scene.probes, s)?);
+        if let Some(bad) = row.iter().position(|x| !x.is_finite()) {
+            return Err(Error::NonFinite {
+                step: self.state.steps_rows,
+                param: "lambda",
+                at: s.lambda,
+                what: format!("probe `{}` = {}", self.columns[bad], row[bad]),
+            });
+        }
+        if let Some(w) = &mut self.history {
+            w.write_record(row.iter().map(|x| format!("{x:.17e}")))
+                .and_then(|_| w.flush().map_err(csv::Error::from))
+                .map_err(|e| Error::Output(format!("history.csv: {e}")))?;
+        }
+        self.state.history.push(row);
+        if self
+            .scene
+            .output
+            .snapshots
+            .iter()
+            .any(|v| (v - s.lambda).abs() < 1e-9)
+        {
+            self.state.snapshots.push(snapshot(model, s));
+        }
+        Ok(())
+    }
+
+    /// Appends a steps.csv line.
+    pub fn step(&mut self, r: &StepRow) -> Result<()> {
+        if let Some(w) = &mut self.steps {
+            let rec = [
+                r.step.to_string(),
+                format!("{:.17e}", r.lambda_start),
+                format!("{:.17e}", r.lambda_end),
+                format!("{:.6e}", r.length),
+                (r.pade as u8).to_string(),
+                format!("{:.3e}", r.end_residual),
+                (r.geometric as u8).to_string(),
+                r.factorizations.to_string(),
+                r.solves.to_string(),
+            ];
+            w.write_record(&rec)
+                .and_then(|_| w.flush().map_err(csv::Error::from))
+                .map_err(|e| Error::Output(format!("steps.csv: {e}")))?;
+        }
+        self.state.steps_rows += 1;
+        Ok(())
+    }
+
+    /// VTK of the deformed shell at a state, indexed in the .pvd.
+    pub fn vtk(&mut self, model: &ShellModel, full: &[f64], lambda: f64, name: &str) -> Result<()> {
+        let Some(d) = &self.dir else { return Ok(()) };
+        let s = snapshot(
+            model,
+            &State {
+                full,
+                lambda,
+                arclength: 0.0,
+            },
+        );
+        let v = |a: &[[f64; 3]]| a.iter().map(|x| Vec3::new(x[0], x[1], x[2])).collect::<Vec<_>>();
+        let x: Vec<Vec3> = s
+            .x0
+            .iter()
+            .zip(&s.displacement)
+            .map(|(a, b)| Vec3::new(a[0] + b[0], a[1] + b[1], a[2] + b[2]))
+            .collect();
+        write_vtu(
+            &d.join(name),
+            &x,
+            &self.scene.mesh.quads,
+            &[
+                PointData::Vector("displacement", v(&s.displacement)),
+                PointData::Vector("director", v(&s.director)),
+                PointData::Vector("contact_force", v(&s.force)),
+                PointData::Scalar("contact_reaction", s.reaction),
+            ],
+        )?;
+        self.state.pvd.push((lambda, 0, name.to_string()));
+        Ok(())
+    }
+
+    /// Writes the checkpoint (atomically: a temporary file renamed).
+    pub fn checkpoint<T: Serialize>(&self, value: &T) -> Result<()> {
+        let Some(d) = &self.dir else { return Ok(()) };
+        let tmp = d.join("checkpoint.json.tmp");
+        let text = serde_json::to_string(value)
+            .map_err(|e| Error::Output(format!("{}: {e}", tmp.display())))?;
+        let mut f = File::create(&tmp).map_err(io_err(&tmp))?;
+        f.write_all(text.as_bytes()).map_err(io_err(&tmp))?;
+        f.sync_all().map_err(io_err(&tmp))?;
+        let path = d.join("checkpoint.json");
+        std::fs::rename(&tmp, &path).map_err(io_err(&path))
+    }
+}
+
+/// The mid-surface fields at a state.
+pub fn snapshot(model: &ShellModel, s: &State) -> Snapshot {
+    let n = model.n_nodes();
+    let (r, f) = probe::nodal_contact(n, &probe::contacts(model, s.full, s.lambda));
+    let arr = |v: Vec3| [v[0], v[1], v[2]];
+    Snapshot {
+        lambda: s.lambda,
+        x0: model.x0.iter().map(|x| arr(*x)).collect(),
+        displacement: (0..n)
+            .map(|i| node_vector(s.full, i, Component::DISPLACEMENT))
+            .collect(),
+        director: (0..n)
+            .map(|i| {
+                let w = node_vector(s.full, i, Component::DIRECTOR);
+                arr(model.a30[i] + Vec3::new(w[0], w[1], w[2]))
+            })
+            .collect(),
+        reaction: r,
+        force: f.into_iter().map(arr).collect(),
+        state: s.full.to_vec(),
+    }
+}

@@ -1,0 +1,749 @@
+//! The run loop of a shell scene: the ANM stepper driven step by step (or the
+//! Newton-Raphson baseline, or one linear solve), each accepted step handed to
+//! the [`Recorder`]: output grid points evaluated from the step's series and
+//! held to the residual test (corrected at fixed lambda when above it), VTK
+//! every `output.vtk_every` steps, a checkpoint. Ctrl-C or SIGTERM ends the
+//! run at the next step end; `--resume` continues from the checkpoint.
+
+use super::build::{build_model, far_nodes_may_be_skipped};
+use super::interrupt;
+use super::probe::State;
+use super::recorder::{Recorder, RecorderState, StepRow};
+pub use super::recorder::Snapshot;
+use crate::contact::{Obstacle, search};
+use crate::error::{Error, Result};
+use crate::linalg::SparseLu;
+use crate::output::plot::{Curve, Panel, draw};
+use crate::output::vtk::{cylinder_surface, write_pvd, write_vtu};
+use crate::output::{Stop, write_csv, write_json};
+use crate::scene::shell::{Method, ShellScene, load};
+use crate::series::path::{Checkpoint, Path as AnmPath};
+use crate::series::stop::Stop as PathStop;
+use crate::series::{ContinuationProblem, Stats, correct};
+use crate::shell::ShellModel;
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// Summary of a run (summary.json).
+#[derive(Clone, Debug, Serialize)]
+pub struct RunReport {
+    pub scene: String,
+    pub mesh: String,
+    pub nodes: usize,
+    pub elements: usize,
+    pub dofs: usize,
+    pub contact_candidates: usize,
+    pub method: String,
+    pub steps: usize,
+    /// The engine's factorizations plus those of the grid corrections.
+    pub factorizations: usize,
+    /// Output grid points corrected by Newton at fixed lambda.
+    pub grid_corrections: usize,
+    pub solves: usize,
+    pub corrections: usize,
+    pub wall_s: f64,
+    pub stats: Stats,
+    pub step_cost: StepCost,
+    pub stop: Stop,
+    /// Probe values at the last history row.
+    pub end: BTreeMap<String, f64>,
+    /// Largest sum, over all steps, of the bounds on the contact forces of the
+    /// candidates left out of the active set (DESIGN §3), N.
+    pub skipped_pull_bound: f64,
+    /// Mean number of candidate nodes carrying contact terms per ANM step.
+    pub mean_active_contacts: Option<f64>,
+    /// Peak resident memory of the process so far (Linux VmHWM), bytes.
+    pub peak_rss_bytes: Option<u64>,
+    /// Whether candidates beyond contact.search_distance were left out.
+    pub far_nodes_skipped: bool,
+    /// Step at which this run was resumed, if it was.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub resumed_at_step: Option<usize>,
+    /// history.csv: column names (lambda, then the probes).
+    pub columns: Vec<String>,
+    #[serde(skip)]
+    pub history: Vec<Vec<f64>>,
+    #[serde(skip)]
+    pub snapshots: Vec<Snapshot>,
+}
+
+impl RunReport {
+    /// (lambda, value) of a history column by name.
+    pub fn curve(&self, name: &str) -> Option<Vec<(f64, f64)>> {
+        let k = self.columns.iter().position(|c| c == name)?;
+        Some(self.history.iter().map(|r| (r[0], r[k])).collect())
+    }
+
+    /// A column's value at a grid lambda (nearest row within 1e-9).
+    pub fn value_at(&self, name: &str, lambda: f64) -> Option<f64> {
+        let k = self.columns.iter().position(|c| c == name)?;
+        self.history
+            .iter()
+            .find(|r| (r[0] - lambda).abs() < 1e-9)
+            .map(|r| r[k])
+    }
+}
+
+/// What an ANM step costs on average over the run, from the engine's
+/// counters (milliseconds), against one factorization + N solves.
+#[derive(Clone, Debug, Serialize)]
+pub struct StepCost {
+    pub assembly_per_step_ms: f64,
+    pub factorization_ms: f64,
+    pub solve_ms: f64,
+    pub series_term_ms: f64,
+    pub step_ms: f64,
+    /// step_ms / (factorization_ms + N solve_ms).
+    pub ratio: f64,
+}
+
+impl StepCost {
+    pub fn new(s: &Stats, order: usize) -> Self {
+        let per = |t: f64, n: usize| 1e3 * t / n.max(1) as f64;
+        let factorization_ms = per(s.factorization_s, s.factorizations);
+        let solve_ms = per(s.solve_s, s.solves);
+        let step_ms = per(
+            s.assembly_s + s.factorization_s + s.solve_s + s.series_s,
+            s.steps,
+        );
+        Self {
+            assembly_per_step_ms: per(s.assembly_s, s.steps),
+            factorization_ms,
+            solve_ms,
+            series_term_ms: per(s.series_s, s.series_terms),
+            step_ms,
+            ratio: step_ms / (factorization_ms + order as f64 * solve_ms),
+        }
+    }
+}
+
+/// checkpoint.json: where `anm run --resume DIR` continues from.
+#[derive(Serialize, Deserialize)]
+struct RunCheckpoint {
+    /// The scene file (absolute) and its text: a resume refuses a changed scene.
+    scene_file: PathBuf,
+    scene_text: String,
+    path: Checkpoint,
+    recorder: RecorderState,
+}
+
+/// Runs a scene file into `out_dir`.
+pub fn run_scene(scene_path: &Path, out_dir: &Path, progress: bool) -> Result<RunReport> {
+    let scene = load(scene_path)?;
+    run_loaded(&scene, Some(out_dir), progress)
+}
+
+/// Continues the interrupted run in `out_dir` from its checkpoint.json.
+pub fn resume(out_dir: &Path, progress: bool) -> Result<RunReport> {
+    let file = out_dir.join("checkpoint.json");
+    let text = std::fs::read_to_string(&file).map_err(|source| Error::Io {
+        file: file.clone(),
+        source,
+    })?;
+    let cp: RunCheckpoint = serde_json::from_str(&text).map_err(|e| Error::Parse {
+        file: file.clone(),
+        message: e.to_string(),
+    })?;
+    let now = crate::scene::read(&cp.scene_file)?;
+    if now != cp.scene_text {
+        return Err(Error::Invalid {
+            file: cp.scene_file.clone(),
+            key: "scene".into(),
+            problem: format!(
+                "changed since the run in {} started: a resumed run must solve the same scene",
+                out_dir.display()
+            ),
+        });
+    }
+    let scene = load(&cp.scene_file)?;
+    run_inner(&scene, Some(out_dir), progress, Some(cp))
+}
+
+/// Runs a loaded scene; `out_dir` None writes nothing (tests, studies).
+pub fn run_loaded(scene: &ShellScene, out_dir: Option<&Path>, progress: bool) -> Result<RunReport> {
+    run_inner(scene, out_dir, progress, None)
+}
+
+fn progress_bar(progress: bool) -> Option<indicatif::ProgressBar> {
+    progress.then(|| {
+        let b = indicatif::ProgressBar::new(1000);
+        b.set_style(
+            indicatif::ProgressStyle::with_template("{bar:40} {percent:>3}% {msg}")
+                .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+        );
+        b
+    })
+}
+
+/// The state of an accepted step at lambda = g: on the series where it
+/// reaches g; between the series end and the corrected end point by linear
+/// interpolation of the correction.
+fn state_at(step: &crate::series::PathStep, g: f64) -> Option<Vec<f64>> {
+    if (g - step.lambda_end).abs() < 1e-12 {
+        return Some(step.u_end.clone());
+    }
+    if let Some(a) = step.a_at_lambda(g) {
+        return Some(step.eval(a).0);
+    }
+    let (u_s, l_s) = step.eval(step.length);
+    let frac = (g - l_s) / (step.lambda_end - l_s);
+    (frac.is_finite() && (0.0..=1.0).contains(&frac)).then(|| {
+        u_s.iter()
+            .zip(&step.u_end)
+            .map(|(a, b)| a + frac * (b - a))
+            .collect()
+    })
+}
+
+/// Scaled length of a chord (du, dlambda): displacements against the
+/// model's characteristic length, lambda against its range.
+fn chord(model: &ShellModel, du: &[f64], dl: f64, lambda_scale: f64) -> f64 {
+    let s = model.scales();
+    (du.iter().zip(&s).map(|(d, s)| (d / s).powi(2)).sum::<f64>() + (dl / lambda_scale).powi(2))
+        .sqrt()
+}
+
+fn run_inner(
+    scene: &ShellScene,
+    out_dir: Option<&Path>,
+    progress: bool,
+    resumed: Option<RunCheckpoint>,
+) -> Result<RunReport> {
+    let start = Instant::now();
+    let mut model = build_model(scene)?;
+    model.length_scale = scene.length_scale;
+    let n_dof = model.ndof();
+    let mut cfg = scene.solver.clone();
+    cfg.lambda_scale = cfg.lambda_end.abs();
+    let resumed_at_step = resumed.as_ref().map(|c| c.path.index);
+    let (path_cp, rec_state) = match resumed {
+        Some(c) => (Some(c.path), Some(c.recorder)),
+        None => (None, None),
+    };
+    let fresh = rec_state.is_none();
+    let mut rec = Recorder::new(scene, out_dir, rec_state)?;
+    let scene_file = std::fs::canonicalize(&scene.file).unwrap_or(scene.file.clone());
+    let scene_text = crate::scene::read(&scene.file)?;
+    let bar = progress_bar(progress);
+    let show = |lambda: f64, stats: &Stats, what: &str| {
+        if let Some(b) = &bar {
+            let frac = (lambda / cfg.lambda_end).clamp(0.0, 1.0);
+            b.set_position((frac * 1000.0) as u64);
+            b.set_message(format!(
+                "{what}lambda {lambda:.4}  steps {}  factorizations {}",
+                stats.steps, stats.factorizations
+            ));
+        }
+    };
+    let zero = vec![0.0; n_dof];
+    if fresh {
+        let full0 = model.expand(&zero, 0.0);
+        rec.record(
+            &model,
+            &State {
+                full: &full0,
+                lambda: 0.0,
+                arclength: 0.0,
+            },
+        )?;
+        rec.state.last_grid = Some(0);
+        rec.vtk(&model, &full0, 0.0, "shell_0000.vtu")?;
+    }
+    let mut grid_lu = SparseLu::new();
+    let mut grid_stats = Stats::default();
+    let far_skipped = model.search_distance.is_finite() && !model.pairs.is_empty();
+    let method_name;
+    let (stop, stats, last): (PathStop, Stats, (Vec<f64>, f64)) = match &scene.method {
+        Method::Anm => {
+            method_name = "anm";
+            let mut path = match path_cp {
+                Some(cp) => AnmPath::resume(&mut model, cp, cfg.clone()),
+                None => AnmPath::new(&mut model, zero.clone(), 0.0, cfg.clone()),
+            };
+            let stop = loop {
+                if interrupt::requested() {
+                    break PathStop::Interrupted {
+                        lambda: path.state().1,
+                    };
+                }
+                let step = match path.step() {
+                    Ok(s) => s,
+                    Err(stop) => break stop,
+                };
+                let stats = path.stats().clone();
+                let model: &mut ShellModel = path.problem();
+                if far_skipped {
+                    let active = model.active_pairs().len();
+                    rec.state.active_sum += active;
+                    let skipped: f64 = skipped_bound(model);
+                    rec.state.skipped_pull_bound = rec.state.skipped_pull_bound.max(skipped);
+                } else {
+                    rec.state.active_sum += model.pairs.len();
+                }
+                let arc0 = rec.state.arclength;
+                for g in rec.grid_between(step.lambda[0], step.lambda_end) {
+                    let u = state_at(&step, g).ok_or_else(|| {
+                        Error::Output(format!(
+                            "step {}: lambda grid value {g} lies in [{}, {}] but on neither the series nor its correction",
+                            step.index, step.lambda[0], step.lambda_end
+                        ))
+                    })?;
+                    let a = step.a_at_lambda(g).unwrap_or(step.length);
+                    let before = grid_stats.factorizations;
+                    let (u, iterations) = correct::correct_at_lambda(
+                        model,
+                        u,
+                        g,
+                        cfg.residual_tol,
+                        cfg.max_corrections,
+                        &mut grid_lu,
+                        &mut grid_stats,
+                        step.index,
+                    )?;
+                    if iterations > 0 {
+                        rec.state.grid_corrections += 1;
+                    }
+                    rec.state.grid_factorizations += grid_stats.factorizations - before;
+                    let full = model.expand(&u, g);
+                    rec.record(
+                        model,
+                        &State {
+                            full: &full,
+                            lambda: g,
+                            arclength: arc0 + a,
+                        },
+                    )?;
+                }
+                rec.state.arclength = arc0 + step.length;
+                rec.step(&StepRow {
+                    step: step.index + 1,
+                    lambda_start: step.lambda[0],
+                    lambda_end: step.lambda_end,
+                    length: step.length,
+                    pade: step.pade.is_some(),
+                    end_residual: step.end_residual,
+                    geometric: step.geometric.is_some(),
+                    factorizations: stats.factorizations,
+                    solves: stats.solves,
+                })?;
+                let every = scene.output.vtk_every;
+                if every > 0 && (step.index + 1).is_multiple_of(every) {
+                    let full = model.expand(&step.u_end, step.lambda_end);
+                    rec.vtk(
+                        model,
+                        &full,
+                        step.lambda_end,
+                        &format!("shell_{:04}.vtu", step.index + 1),
+                    )?;
+                }
+                rec.state.wall_s_before = 0.0;
+                rec.checkpoint(&RunCheckpointRef {
+                    scene_file: &scene_file,
+                    scene_text: &scene_text,
+                    path: &path.checkpoint(),
+                    recorder: &rec.state,
+                })?;
+                show(step.lambda_end, &stats, "");
+            };
+            let (u, l) = path.state();
+            (stop, path.stats().clone(), (u.to_vec(), l))
+        }
+        Method::Newton(ncfg) => {
+            method_name = "newton";
+            let n_grid = (ncfg.lambda_end / scene.output.lambda_step).abs().round() as i64;
+            let d = rec.grid_step();
+            let grid: Vec<f64> = (1..=n_grid).map(|i| i as f64 * d).collect();
+            let mut prev = (zero.clone(), 0.0);
+            let mut count = 0usize;
+            // The engine holds the model; probes read a second instance.
+            let mut view = build_model(scene)?;
+            view.length_scale = scene.length_scale;
+            let m = &view;
+            let result = crate::series::newton::run(
+                &mut model,
+                zero.clone(),
+                0.0,
+                ncfg,
+                &grid,
+                |u, lambda, stats| {
+                    if interrupt::requested() {
+                        return Err(Error::Interrupted { lambda });
+                    }
+                    let du: Vec<f64> = u.iter().zip(&prev.0).map(|(a, b)| a - b).collect();
+                    rec.state.arclength += chord(m, &du, lambda - prev.1, ncfg.lambda_end.abs());
+                    count += 1;
+                    rec.step(&StepRow {
+                        step: count,
+                        lambda_start: prev.1,
+                        lambda_end: lambda,
+                        length: chord(m, &du, lambda - prev.1, ncfg.lambda_end.abs()),
+                        pade: false,
+                        end_residual: 0.0,
+                        geometric: false,
+                        factorizations: stats.factorizations,
+                        solves: stats.solves,
+                    })?;
+                    if grid.iter().any(|g| (g - lambda).abs() < 1e-12) {
+                        let g = (lambda / d).round() * d;
+                        let full = m.expand(u, lambda);
+                        rec.record(
+                            m,
+                            &State {
+                                full: &full,
+                                lambda: g,
+                                arclength: rec.state.arclength,
+                            },
+                        )?;
+                    }
+                    prev = (u.to_vec(), lambda);
+                    show(lambda, stats, "Newton: ");
+                    Ok(())
+                },
+            );
+            let stop = match result.stop {
+                PathStop::Failed(Error::Interrupted { lambda }) => PathStop::Interrupted { lambda },
+                other => other,
+            };
+            (stop, result.stats, (result.u_end, result.lambda_end))
+        }
+        Method::Linear => {
+            method_name = "linear";
+            let mut stats = Stats::default();
+            let (k, rl) = model.tangent(&zero, 0.0)?;
+            let f = crate::series::continuation::factorize(&mut grid_lu, &k, &mut stats, 0, 0.0)?;
+            let u1 = f.solve(&rl.iter().map(|x| -x).collect::<Vec<_>>());
+            stats.solves += 1;
+            stats.steps = 1;
+            if let Some(i) = u1.iter().position(|x| !x.is_finite()) {
+                return Err(Error::SingularMatrix {
+                    step: 0,
+                    param: "lambda",
+                    at: 0.0,
+                    detail: format!("non-finite linear solution at free dof {i}"),
+                });
+            }
+            let l_end = cfg.lambda_end;
+            let scale = chord(&model, &u1, 1.0, l_end.abs());
+            for g in rec.grid_between(0.0, l_end) {
+                let u: Vec<f64> = u1.iter().map(|x| x * g).collect();
+                let full = model.expand(&u, g);
+                rec.record(
+                    &model,
+                    &State {
+                        full: &full,
+                        lambda: g,
+                        arclength: scale * g.abs(),
+                    },
+                )?;
+            }
+            rec.state.arclength = scale * l_end.abs();
+            rec.step(&StepRow {
+                step: 1,
+                lambda_start: 0.0,
+                lambda_end: l_end,
+                length: rec.state.arclength,
+                pade: false,
+                end_residual: 0.0,
+                geometric: false,
+                factorizations: 1,
+                solves: 1,
+            })?;
+            let u: Vec<f64> = u1.iter().map(|x| x * l_end).collect();
+            (PathStop::End { lambda: l_end }, stats, (u, l_end))
+        }
+    };
+    if let Some(b) = &bar {
+        b.finish();
+    }
+    let (u_last, lambda_last) = last;
+    let full_last = model.expand(&u_last, lambda_last);
+    // The final point when it is off the grid (a stop between grid values).
+    let last_row = rec.state.history.last().map(|r| r[0]);
+    if last_row.is_none_or(|l| (l - lambda_last).abs() > 1e-12)
+        && matches!(stop, PathStop::End { .. })
+    {
+        rec.record(
+            &model,
+            &State {
+                full: &full_last,
+                lambda: lambda_last,
+                arclength: rec.state.arclength,
+            },
+        )?;
+    }
+    let message = match &stop {
+        PathStop::Failed(e) => Some(e.to_string()),
+        PathStop::MaxSteps { steps, lambda } => Some(format!(
+            "solver.max_steps = {steps} reached at lambda = {lambda}"
+        )),
+        PathStop::Interrupted { lambda } => Some(format!(
+            "interrupted (Ctrl-C or SIGTERM) at the step end lambda = {lambda}; continue with `anm run --resume DIR`"
+        )),
+        PathStop::End { .. } => None,
+    };
+    let stop_out = Stop {
+        reason: stop.reason().to_string(),
+        t: None,
+        lambda: Some(stop.lambda().unwrap_or(lambda_last)),
+        message,
+    };
+    let factorizations = stats.factorizations + rec.state.grid_factorizations;
+    let end: BTreeMap<String, f64> = rec
+        .state
+        .history
+        .last()
+        .map(|r| rec.columns.iter().cloned().zip(r.iter().copied()).collect())
+        .unwrap_or_default();
+    let interrupted = matches!(stop, PathStop::Interrupted { .. });
+    if out_dir.is_some() && !interrupted {
+        finish_files(&mut rec, &model, &full_last, lambda_last)?;
+    }
+    if let (Some(d), PathStop::End { .. }) = (out_dir, &stop) {
+        // A finished run has nothing to resume.
+        let _ = std::fs::remove_file(d.join("checkpoint.json"));
+    }
+    let report = RunReport {
+        scene: scene.file.display().to_string(),
+        mesh: scene.mesh.file.display().to_string(),
+        nodes: scene.mesh.nodes.len(),
+        elements: scene.mesh.quads.len(),
+        dofs: n_dof,
+        contact_candidates: model.pairs.len(),
+        method: method_name.to_string(),
+        steps: stats.steps,
+        factorizations,
+        grid_corrections: rec.state.grid_corrections,
+        solves: stats.solves + grid_stats.solves,
+        corrections: stats.corrections,
+        wall_s: rec.state.wall_s_before + start.elapsed().as_secs_f64(),
+        step_cost: StepCost::new(&stats, cfg.order),
+        stats: stats.clone(),
+        stop: stop_out,
+        end,
+        skipped_pull_bound: rec.state.skipped_pull_bound,
+        mean_active_contacts: (method_name == "anm" && stats.steps > 0 && !model.pairs.is_empty())
+            .then(|| rec.state.active_sum as f64 / stats.steps as f64),
+        peak_rss_bytes: crate::output::peak_rss_bytes(),
+        far_nodes_skipped: far_skipped,
+        resumed_at_step,
+        columns: rec.columns.clone(),
+        history: rec.state.history.clone(),
+        snapshots: rec.state.snapshots.clone(),
+    };
+    if let Some(d) = out_dir {
+        write_json(&d.join("summary.json"), &report)?;
+        if !interrupted {
+            if scene.output.hdf5 {
+                write_fields(&d.join("fields.h5"), scene, &report.snapshots)?;
+            }
+            if scene.output.plot && report.history.len() > 1 {
+                plot(&d.join("plot.svg"), scene, &report)?;
+            }
+        }
+    }
+    Ok(report)
+}
+
+/// Borrowed form of [`RunCheckpoint`] for writing.
+#[derive(Serialize)]
+struct RunCheckpointRef<'a> {
+    scene_file: &'a Path,
+    scene_text: &'a str,
+    path: &'a Checkpoint,
+    recorder: &'a RecorderState,
+}
+
+/// Sum of the force bounds of the candidates outside the active set.
+fn skipped_bound(model: &ShellModel) -> f64 {
+    let mut is_active = vec![false; model.pairs.len()];
+    for &i in model.active_pairs() {
+        is_active[i] = true;
+    }
+    model
+        .pairs
+        .iter()
+        .zip(&is_active)
+        .filter(|(_, a)| !**a)
+        .map(|(p, _)| search::skipped_force_bound(p, model.search_distance))
+        .sum()
+}
+
+/// Files written once a run ends: the last VTK, the obstacles, the .pvd
+/// index, per-node contact forces at the last point.
+fn finish_files(rec: &mut Recorder, model: &ShellModel, full: &[f64], lambda: f64) -> Result<()> {
+    let Some(d) = rec.dir.clone() else {
+        return Ok(());
+    };
+    rec.vtk(model, full, lambda, "shell_final.vtu")?;
+    let scene = rec.scene;
+    let size = scene.mesh.size();
+    let mut pvd = rec.state.pvd.clone();
+    let times: Vec<f64> = pvd.iter().map(|e| e.0).collect();
+    for (k, ob) in model.obstacles.iter().enumerate() {
+        let (pts, quads) = match ob {
+            Obstacle::Cylinder {
+                centre,
+                axis,
+                radius,
+            } => cylinder_surface(centre, axis, *radius, 1.5 * size.min(4.0 * radius), 96),
+            Obstacle::Plane { point, normal } => cylinder_surface(point, normal, 0.5 * size, 0.0, 4),
+        };
+        let name = format!("obstacle_{k}.vtu");
+        write_vtu(&d.join(&name), &pts, &quads, &[])?;
+        // The obstacle at each time of the collection: moved by its motion.
+        for &t in &times {
+            let shift = model.motions[k].shift(t);
+            if shift.norm() == 0.0 {
+                pvd.push((t, k + 1, name.clone()));
+            } else {
+                let moved: Vec<_> = pts.iter().map(|p| p + shift).collect();
+                let name_t = format!("obstacle_{k}_{:.6}.vtu", t);
+                write_vtu(&d.join(&name_t), &moved, &quads, &[])?;
+                pvd.push((t, k + 1, name_t));
+            }
+        }
+    }
+    write_pvd(&d.join("shell.pvd"), &pvd)?;
+    let mut rows = vec![];
+    for c in super::probe::contacts(model, full, lambda) {
+        let x0 = model.x0[c.node];
+        rows.push(vec![
+            (c.node + 1) as f64,
+            c.obstacle as f64,
+            x0[0],
+            x0[1],
+            x0[2],
+            c.gap,
+            c.r,
+            c.r * c.normal[0],
+            c.r * c.normal[1],
+            c.r * c.normal[2],
+        ]);
+    }
+    if !rows.is_empty() {
+        write_csv(
+            &d.join("contact_final.csv"),
+            &["node", "obstacle", "X", "Y", "Z", "gap", "rn", "fx", "fy", "fz"],
+            &rows,
+        )?;
+    }
+    Ok(())
+}
+
+/// plot.svg: one panel per probe unit (lengths, forces, dimensionless).
+fn plot(path: &Path, scene: &ShellScene, report: &RunReport) -> Result<()> {
+    let stem = scene
+        .file
+        .file_stem()
+        .map(|s| s.to_string_lossy().to_string())
+        .unwrap_or_default();
+    let mut groups: Vec<(&str, Vec<usize>)> = vec![];
+    for (i, p) in scene.probes.iter().enumerate() {
+        if matches!(p.quantity, crate::scene::shell::Quantity::Lambda) {
+            continue;
+        }
+        match groups.iter_mut().find(|(u, _)| *u == p.unit) {
+            Some((_, v)) => v.push(i),
+            None => groups.push((p.unit, vec![i])),
+        }
+    }
+    if groups.is_empty() {
+        return Ok(());
+    }
+    let titles: Vec<String> = groups
+        .iter()
+        .map(|(u, _)| {
+            let what = match *u {
+                "m" => "lengths",
+                "N" => "forces",
+                _ => "dimensionless",
+            };
+            format!("{stem}: {what}")
+        })
+        .collect();
+    let ylabels: Vec<String> = groups
+        .iter()
+        .map(|(u, _)| format!("value ({u})"))
+        .collect();
+    let panels: Vec<Panel> = groups
+        .iter()
+        .enumerate()
+        .map(|(g, (_, idx))| Panel {
+            title: &titles[g],
+            x_label: "lambda (-)",
+            y_label: &ylabels[g],
+            curves: idx
+                .iter()
+                .map(|&i| Curve {
+                    label: &scene.probes[i].name,
+                    points: report.history.iter().map(|r| (r[0], r[i + 1])).collect(),
+                })
+                .collect(),
+            log: (false, false),
+        })
+        .collect();
+    draw(path, &panels)
+}
+
+/// fields.h5: one group per snapshot (feature `hdf5`).
+#[cfg(feature = "hdf5")]
+fn write_fields(path: &Path, scene: &ShellScene, snapshots: &[Snapshot]) -> Result<()> {
+    let mut w = crate::output::hdf5::FieldWriter::create(
+        path,
+        &[
+            ("scene", &scene.file.display().to_string()),
+            ("kind", "shell"),
+            ("units", "scene units; director dimensionless"),
+        ],
+    )?;
+    let flat = |v: &[[f64; 3]]| v.iter().flatten().copied().collect::<Vec<f64>>();
+    for s in snapshots {
+        let coords: Vec<[f64; 3]> =
+            s.x0.iter()
+                .zip(&s.displacement)
+                .map(|(a, b)| [a[0] + b[0], a[1] + b[1], a[2] + b[2]])
+                .collect();
+        w.write_step(
+            &[("lambda", s.lambda)],
+            &[
+                ("reference_coordinates", 3, &flat(&s.x0)),
+                ("coordinates", 3, &flat(&coords)),
+                ("displacement", 3, &flat(&s.displacement)),
+                ("director", 3, &flat(&s.director)),
+                ("contact_force", 3, &flat(&s.force)),
+                ("contact_reaction", 1, &s.reaction),
+            ],
+        )?;
+    }
+    Ok(())
+}
+
+#[cfg(not(feature = "hdf5"))]
+fn write_fields(_path: &Path, _scene: &ShellScene, _snapshots: &[Snapshot]) -> Result<()> {
+    unreachable!("scene validation rejects output.hdf5 without the hdf5 feature")
+}
+
+/// Whether far candidates of this model may be skipped (re-exported for the
+/// studies).
+pub fn skipping_allowed(model: &ShellModel, residual_tol: f64) -> bool {
+    far_nodes_may_be_skipped(model, residual_tol)
+}
+
+/// The initial tangent's factorization: a cheap check that a scene is not
+/// singular (used by `anm check`).
+pub fn check_factorizes(scene: &ShellScene) -> Result<()> {
+    let mut m = build_model(scene)?;
+    let zero = vec![0.0; m.ndof()];
+    let (k, _) = m.tangent(&zero, 0.0)?;
+    SparseLu::new()
+        .factorize(&k)
+        .map(|_| ())
+        .map_err(|detail| Error::SingularMatrix {
+            step: 0,
+            param: "lambda",
+            at: 0.0,
+            detail: format!("initial tangent of {}: {detail}", scene.file.display()),
+        })
+}

@@ -1,0 +1,157 @@
+//! Scenes mutated at random (fixed seed): wrong types, odd values, missing
+//! and extra keys, in the canonical shell scene and a scene with every
+//! table. Every case either fails validation with an error that names the
+//! file, or runs (at most 15 steps) without a panic, and nothing written is
+//! NaN.
+
+use std::panic::{AssertUnwindSafe, catch_unwind};
+use toml::Value;
+
+/// xorshift64*: a fixed, dependency-free sequence.
+struct Rng(u64);
+
+impl Rng {
+    fn next(&mut self) -> u64 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        self.0.wrapping_mul(0x2545_F491_4F6C_DD1D)
+    }
+    fn below(&mut self, n: usize) -> usize {
+        (self.next() % n as u64) as usize
+    }
+}
+
+/// Every (path) of a leaf value in the table; arrays of tables by index.
+fn leaves(v: &Value, path: &mut Vec<String>, out: &mut Vec<Vec<String>>) {
+    match v {
+        Value::Table(t) => {
+            for (k, x) in t {
+                path.push(k.clone());
+                leaves(x, path, out);
+                path.pop();
+            }
+        }
+        Value::Array(a) if a.iter().all(|x| x.is_table()) && !a.is_empty() => {
+            for (i, x) in a.iter().enumerate() {
+                path.push(i.to_string());
+                leaves(x, path, out);
+                path.pop();
+            }
+        }
+        _ => out.push(path.clone()),
+    }
+}
+
+fn get_mut<'a>(v: &'a mut Value, path: &[String]) -> &'a mut Value {
+    path.iter().fold(v, |v, k| match v {
+        Value::Table(t) => t.get_mut(k).unwrap(),
+        Value::Array(a) => &mut a[k.parse::<usize>().unwrap()],
+        _ => unreachable!(),
+    })
+}
+
+fn mutate(rng: &mut Rng, doc: &mut Value) -> String {
+    let mut all = vec![];
+    leaves(doc, &mut vec![], &mut all);
+    let path = all[rng.below(all.len())].clone();
+    let (parent, key) = path.split_at(path.len() - 1);
+    let what = rng.below(6);
+    let odd = [
+        Value::Float(f64::NAN),
+        Value::Float(f64::INFINITY),
+        Value::Float(-1.0),
+        Value::Float(0.0),
+        Value::Float(1e300),
+        Value::Float(1e-300),
+        Value::Integer(-3),
+        Value::String("??".into()),
+        Value::Boolean(true),
+        Value::Array(vec![]),
+        Value::Array(vec![Value::Float(1.0); 2]),
+    ];
+    let target = get_mut(doc, parent);
+    match what {
+        0 => {
+            if let Value::Table(t) = target {
+                t.remove(&key[0]);
+            }
+        }
+        1 => {
+            if let Value::Table(t) = target {
+                t.insert(format!("{}_typo", key[0]), Value::Integer(1));
+            }
+        }
+        _ => {
+            let v = get_mut(target, key);
+            *v = match v.clone() {
+                Value::Float(x) if what == 2 => Value::Float(x * [-1.0, 0.0, 1e-12, 1e12][rng.below(4)]),
+                Value::Array(mut a) if what == 3 && !a.is_empty() => {
+                    let i = rng.below(a.len());
+                    a[i] = odd[rng.below(odd.len())].clone();
+                    Value::Array(a)
+                }
+                _ => odd[rng.below(odd.len())].clone(),
+            };
+        }
+    }
+    format!("{} ({})", path.join("."), ["removed", "extra key", "scaled", "array entry", "odd value", "odd value"][what])
+}
+
+#[test]
+fn mutated_scenes_give_errors_or_finite_results_never_panics() {
+    let root = env!("CARGO_MANIFEST_DIR");
+    let dir = std::env::temp_dir().join("anm-fuzz");
+    std::fs::create_dir_all(&dir).unwrap();
+    let bases = [
+        (format!("{root}/scenes/plate-cylinder-coarse.toml"), format!("{root}/meshes/plate-cylinder-20x2.msh")),
+        (format!("{root}/tests/data/shell-every-table.toml"), String::new()),
+    ];
+    let mut rng = Rng(0x9E37_79B9_7F4A_7C15);
+    let (mut rejected, mut ran, mut stopped) = (0, 0, 0);
+    let cases = 300;
+    for case in 0..cases {
+        let (scene, mesh) = &bases[case % bases.len()];
+        let text = std::fs::read_to_string(scene).unwrap();
+        let mut doc: Value = toml::from_str(&text).unwrap();
+        if !mesh.is_empty() {
+            doc["mesh"]["file"] = Value::String(mesh.clone());
+        }
+        let what = mutate(&mut rng, &mut doc);
+        // Keep runs short: cap the steps (unless the mutation removed them).
+        if let Some(s) = doc.get_mut("solver").and_then(|s| s.as_table_mut()) {
+            s.insert("max_steps".into(), Value::Integer(15));
+        }
+        let p = dir.join(format!("case{case}.toml"));
+        std::fs::write(&p, toml::to_string(&doc).unwrap()).unwrap();
+        let result = catch_unwind(AssertUnwindSafe(|| {
+            let s = anm::scene::shell::load(&p)?;
+            anm::run::run_loaded(&s, None, false)
+        }));
+        match result {
+            Err(_) => panic!("case {case}: {what}: panic"),
+            Ok(Err(e)) => {
+                let msg = e.to_string();
+                assert!(
+                    msg.contains(&format!("case{case}.toml")) || matches!(e, anm::Error::Mesh { .. } | anm::Error::SingularMatrix { .. } | anm::Error::NoConvergence { .. } | anm::Error::NonFinite { .. } | anm::Error::StepCollapse { .. }),
+                    "case {case}: {what}: error does not name the scene: {msg}"
+                );
+                rejected += 1;
+            }
+            Ok(Ok(r)) => {
+                assert!(
+                    r.history.iter().flatten().all(|x| x.is_finite()),
+                    "case {case}: {what}: NaN in the output"
+                );
+                if r.stop.reason == "end" || r.stop.reason == "max_steps" {
+                    ran += 1;
+                } else {
+                    assert!(r.stop.message.is_some(), "case {case}: {what}: stop without diagnosis");
+                    stopped += 1;
+                }
+            }
+        }
+    }
+    println!("{cases} mutated scenes: {rejected} rejected, {ran} ran, {stopped} stopped with a diagnosis");
+    assert!(rejected > 50 && ran > 20, "the mutations must exercise both paths");
+}

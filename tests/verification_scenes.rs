@@ -1,0 +1,128 @@
+//! The verification cases as scene files (scenes/verification/), run
+//! through the same driver as `anm run`, against their published or closed
+//! form values, with the tolerances of the API tests they mirror
+//! (shell_linear_macneal_harder.rs, shell_patch_macneal_harder.rs,
+//! shell_nonlinear_cantilevers.rs, contact_propped_cantilever.rs).
+
+use anm::run::{RunReport, run_loaded};
+use std::f64::consts::PI;
+
+fn run(name: &str) -> RunReport {
+    let path = format!("{}/scenes/verification/{name}.toml", env!("CARGO_MANIFEST_DIR"));
+    let scene = anm::scene::shell::load(std::path::Path::new(&path))
+        .unwrap_or_else(|e| panic!("{name}: {e}"));
+    let r = run_loaded(&scene, None, false).unwrap_or_else(|e| panic!("{name}: {e}"));
+    assert_eq!(r.stop.reason, "end", "{name}: {:?}", r.stop);
+    r
+}
+
+#[track_caller]
+fn assert_rel(got: f64, want: f64, tol: f64, what: &str) {
+    let err = (got - want).abs() / want.abs();
+    println!("{what}: {got:.6e} (reference {want:.6e}, relative error {err:.2e}, tolerance {tol:.0e})");
+    assert!(got.is_finite() && err <= tol, "{what}: {got:e} vs {want:e}: {err:.3e} > {tol:e}");
+}
+
+#[test]
+fn scordelis_lo_roof_scene() {
+    let r = run("scordelis-lo");
+    assert_rel(-r.end["uz_free_edge_midspan"], 0.3024, 0.02, "Scordelis-Lo 32x32");
+}
+
+#[test]
+fn pinched_cylinder_scene() {
+    let r = run("pinched-cylinder");
+    assert_rel(-r.end["uz_load"], 1.8248e-5, 0.02, "pinched cylinder 32x32");
+}
+
+#[test]
+fn pinched_hemisphere_scene() {
+    let r = run("hemisphere");
+    assert_rel(r.end["ux_load"], 0.0924, 0.02, "hemisphere 32x32");
+}
+
+/// Interior nodes of the distorted patch against the prescribed state.
+fn patch(name: &str, exact: impl Fn(f64, f64, &str) -> f64) {
+    let r = run(name);
+    let interior = [(0.04, 0.02), (0.18, 0.03), (0.16, 0.08), (0.08, 0.08)];
+    let mut worst = 0.0f64;
+    let mut scale = 0.0f64;
+    for (i, (x, y)) in interior.iter().enumerate() {
+        for (col, v) in &r.end {
+            if let Some(c) = col.strip_suffix(&format!("_{}", i + 5)) {
+                let want = exact(*x, *y, c);
+                scale = scale.max(want.abs());
+                worst = worst.max((v - want).abs());
+            }
+        }
+    }
+    println!("{name}: max nodal error {:.3e} of max value {scale:.3e}", worst);
+    assert!(scale > 0.0 && worst / scale < 1e-8, "{name}: {:.3e}", worst / scale);
+}
+
+#[test]
+fn membrane_patch_scene() {
+    let e33 = -0.25 / 0.75 * 2e-3;
+    patch("patch-membrane", |x, y, c| match c {
+        "ux" => 1e-3 * (x + y / 2.0),
+        "uy" => 1e-3 * (y + x / 2.0),
+        "wz" => e33,
+        _ => unreachable!(),
+    });
+}
+
+#[test]
+fn bending_patch_scene() {
+    patch("patch-bending", |x, y, c| match c {
+        "uz" => 1e-3 * (x * x + x * y + y * y) / 2.0,
+        "wx" => -1e-3 * (x + y / 2.0),
+        "wy" => -1e-3 * (y + x / 2.0),
+        _ => unreachable!(),
+    });
+}
+
+const L: f64 = 10.0;
+
+#[test]
+fn cantilever_moment_scene_rolls_into_a_circle() {
+    let r = run("cantilever-moment");
+    let mut worst = 0.0f64;
+    for lt in [0.25, 0.5, 0.75, 1.0] {
+        let theta = lt * 2.0 * PI;
+        let radius = L / theta;
+        let (xe, ze) = (radius * theta.sin(), radius * (1.0 - theta.cos()));
+        let x = L + r.value_at("ux_tip", lt).unwrap();
+        let z = r.value_at("uz_tip", lt).unwrap();
+        let err = ((x - xe).powi(2) + (z - ze).powi(2)).sqrt() / L;
+        println!("M/Mmax {lt}: tip ({x:.5}, {z:.5}), exact ({xe:.5}, {ze:.5}), error {err:.2e} L");
+        worst = worst.max(err);
+    }
+    println!("{} steps", r.steps);
+    assert!(worst <= 0.005, "tip position error {worst:.3e} L > 0.5%");
+}
+
+#[test]
+fn cantilever_shear_scene_matches_the_elastica() {
+    let r = run("cantilever-shear");
+    let exact = [(0.25, 0.05643, 0.30172), (0.5, 0.16064, 0.49346), (1.0, 0.32894, 0.66996)];
+    for (lt, ue, we) in exact {
+        let u = -r.value_at("ux_tip", lt).unwrap() / L;
+        let w = r.value_at("uz_tip", lt).unwrap() / L;
+        assert_rel(u, ue, 0.01, &format!("u/L at k = {}", 4.0 * lt));
+        assert_rel(w, we, 0.01, &format!("w/L at k = {}", 4.0 * lt));
+    }
+}
+
+#[test]
+fn propped_cantilever_scene() {
+    let r = run("propped-cantilever");
+    let ei = 2e9 * 0.1 * 0.01f64.powi(3) / 12.0;
+    let want = 1.0 - 3.0 * ei * 1e-2;
+    println!("tip w = {:.6e} (gap 1e-2), {} steps", r.end["uz_tip"], r.steps);
+    // Geometric nonlinearity, of relative size (g/L)^2 = 1e-4, is the
+    // largest modelling difference from the closed form.
+    assert_rel(r.end["R"], want, 1e-3, "plane reaction");
+    // Global equilibrium: clamp reaction + plane reaction = applied load,
+    // to the residual the run is held to (1e-6 |F| per step end).
+    assert_rel(r.end["reaction_z"] + r.end["R"], 1.0, 1e-5, "clamp + plane reactions");
+}
