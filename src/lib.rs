@@ -19,6 +19,7 @@
 
 pub mod contact;
 pub mod error;
+pub mod fe;
 pub mod linalg;
 pub mod mesh;
 pub mod model;
