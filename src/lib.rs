@@ -22,7 +22,6 @@ pub mod error;
 pub mod fe;
 pub mod linalg;
 pub mod mesh;
-mod mesh_shim;
 pub mod model;
 pub mod output;
 pub mod run;

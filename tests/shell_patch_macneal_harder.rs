@@ -52,6 +52,8 @@ fn patch() -> Mesh {
         quads,
         exact_normals: None,
         groups,
+        edge_groups: BTreeMap::new(),
+        surface_groups: BTreeMap::new(),
     }
 }
 

@@ -4,9 +4,13 @@
 //! Sections read: `$MeshFormat` (must be 4.1 ASCII), `$PhysicalNames`,
 //! `$Entities` (physical tags of points, curves and surfaces), `$Nodes`,
 //! `$Elements`. Surface elements must be 4-node quadrilaterals (type 3);
-//! points (type 15) and 2-node lines (type 1) only define node sets. Every
+//! points (type 15) and 2-node lines (type 1) only define groups. Every
 //! physical group becomes a node set named after it (the nodes of its
-//! elements). Nodes not used by any quadrilateral are dropped.
+//! elements; unnamed groups are called `dim:tag`); in addition a physical
+//! curve becomes an edge group (its 2-node lines, in file order) and a
+//! physical surface a surface group (its quadrilaterals). Nodes not used by
+//! any quadrilateral are dropped and the others renumbered in order of first
+//! use; a group with a node outside every quadrilateral is an error.
 
 use super::{Mesh, Vec3};
 use crate::error::{Error, Result};
@@ -92,7 +96,8 @@ pub fn parse(path: &Path, text: &str) -> Result<Mesh> {
     let mut quad_tags = Vec::new();
     let mut group_nodes: BTreeMap<String, BTreeSet<usize>> = BTreeMap::new();
     let mut group_lines: BTreeMap<String, usize> = BTreeMap::new();
-    let mut pending: Vec<(usize, i64, Vec<usize>, usize)> = Vec::new();
+    // (entity dim, entity tag, element type, nodes, line in the file).
+    let mut pending: Vec<(usize, i64, usize, Vec<usize>, usize)> = Vec::new();
     let mut seen_format = false;
     while let Some((i, l)) = ln.it.next() {
         ln.line = i + 1;
@@ -199,7 +204,7 @@ pub fn parse(path: &Path, text: &str) -> Result<Mesh> {
                             quad_lines.push(ln.line);
                             quad_tags.push(v[0]);
                         }
-                        pending.push((dim, etag, idx, ln.line));
+                        pending.push((dim, etag, ty, idx, ln.line));
                     }
                 }
                 ln.next()?;
@@ -221,18 +226,40 @@ pub fn parse(path: &Path, text: &str) -> Result<Mesh> {
             problem: "no 4-node quadrilateral elements (is there a Physical Surface?)".into(),
         });
     }
-    for (dim, etag, idx, line) in pending {
+    // Edges (old node indices) and quads of the groups.
+    let mut edge_old: BTreeMap<String, Vec<[usize; 2]>> = BTreeMap::new();
+    let mut surface_groups: BTreeMap<String, Vec<usize>> = BTreeMap::new();
+    let mut quad_index = 0;
+    for (dim, etag, ty, idx, line) in pending {
         for ptag in entity_phys.get(&(dim, etag)).into_iter().flatten() {
             let name = names
                 .get(&(dim, *ptag))
                 .cloned()
                 .unwrap_or_else(|| format!("{dim}:{ptag}"));
             group_lines.entry(name.clone()).or_insert(line);
+            match ty {
+                1 => edge_old
+                    .entry(name.clone())
+                    .or_default()
+                    .push([idx[0], idx[1]]),
+                3 => surface_groups
+                    .entry(name.clone())
+                    .or_default()
+                    .push(quad_index),
+                _ => {}
+            }
             group_nodes
                 .entry(name)
                 .or_default()
                 .extend(idx.iter().copied());
         }
+        if ty == 3 {
+            quad_index += 1;
+        }
+    }
+    for v in surface_groups.values_mut() {
+        v.sort_unstable();
+        v.dedup();
     }
     // Keep only nodes used by quadrilaterals.
     let mut used = vec![usize::MAX; nodes.len()];
@@ -264,6 +291,11 @@ pub fn parse(path: &Path, text: &str) -> Result<Mesh> {
         v.sort_unstable();
         groups.insert(name, v);
     }
+    // Every node of an edge group is in its node set, checked above.
+    let edge_groups = edge_old
+        .into_iter()
+        .map(|(name, e)| (name, e.iter().map(|&[a, b]| [used[a], used[b]]).collect()))
+        .collect();
     Ok(Mesh {
         file: path.to_path_buf(),
         nodes: kept,
@@ -272,5 +304,139 @@ pub fn parse(path: &Path, text: &str) -> Result<Mesh> {
         quad_tags,
         exact_normals: None,
         groups,
+        edge_groups,
+        surface_groups,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Two quadrilaterals on [0, 2] × [0, 1] in two surface entities, a
+    /// physical point, a physical curve (the bottom side), two physical
+    /// surfaces (`plate`: both, `left`: the first) and an unused node 7.
+    const MSH: &str = r#"$MeshFormat
+4.1 0 8
+$EndMeshFormat
+$PhysicalNames
+4
+0 10 "corner"
+1 20 "bottom"
+2 30 "plate"
+2 31 "left"
+$EndPhysicalNames
+$Entities
+1 1 2 0
+1 0 0 0 1 10
+1 0 0 0 2 0 0 1 20 2 1 -2
+1 0 0 0 1 1 0 2 30 31 0
+2 1 0 0 2 1 0 1 30 0
+$EndEntities
+$Nodes
+1 7 1 7
+2 1 0 7
+1
+2
+3
+4
+5
+6
+7
+0 0 0
+1 0 0
+2 0 0
+0 1 0
+1 1 0
+2 1 0
+5 5 0
+$EndNodes
+$Elements
+4 5 1 5
+0 1 15 1
+1 1
+1 1 1 2
+2 1 2
+3 2 3
+2 1 3 1
+4 1 2 5 4
+2 2 3 1
+5 2 3 6 5
+$EndElements
+"#;
+
+    fn at(m: &Mesh, n: usize) -> [f64; 3] {
+        m.nodes[n].into()
+    }
+
+    #[test]
+    fn three_kinds_of_groups() {
+        let f = Path::new("two.msh");
+        let m = parse(f, MSH).unwrap();
+        let scene = Path::new("scene.toml");
+        assert_eq!(m.nodes.len(), 6, "unused node dropped");
+        assert_eq!(m.quads.len(), 2);
+        assert_eq!(m.quad_tags, vec![4, 5]);
+        // Node sets of every group.
+        let corner = m.group("corner", scene, "k").unwrap();
+        assert_eq!(corner.len(), 1);
+        assert_eq!(at(&m, corner[0]), [0.0, 0.0, 0.0]);
+        assert_eq!(m.group("bottom", scene, "k").unwrap().len(), 3);
+        assert_eq!(m.group("plate", scene, "k").unwrap().len(), 6);
+        assert_eq!(m.group("left", scene, "k").unwrap().len(), 4);
+        // Edges of the physical curve, renumbered, in file order.
+        let e = m.edges("bottom", scene, "k").unwrap();
+        let pos: Vec<[[f64; 3]; 2]> = e.iter().map(|&[a, b]| [at(&m, a), at(&m, b)]).collect();
+        assert_eq!(
+            pos,
+            vec![
+                [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]],
+                [[1.0, 0.0, 0.0], [2.0, 0.0, 0.0]]
+            ]
+        );
+        // Quads of the physical surfaces.
+        assert_eq!(m.surface("plate", scene, "k").unwrap(), &[0, 1]);
+        assert_eq!(m.surface("left", scene, "k").unwrap(), &[0]);
+        // Wrong kinds are rejected with the kind and the candidates.
+        let err = m
+            .surface("bottom", scene, "load.group")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("`bottom`")
+                && err.contains("is an edge group, not a surface group")
+                && err.contains("surface groups: left, plate")
+                && err.contains("scene.toml")
+                && err.contains("load.group"),
+            "{err}"
+        );
+        let err = m.edges("corner", scene, "k").unwrap_err().to_string();
+        assert!(
+            err.contains("is a node group, not an edge group (edge groups: bottom)"),
+            "{err}"
+        );
+        let err = m.edges("top", scene, "k").unwrap_err().to_string();
+        assert!(
+            err.contains("not found") && err.contains("two.msh"),
+            "{err}"
+        );
+        m.directors().unwrap();
+    }
+
+    #[test]
+    fn line_off_the_surface_is_an_error() {
+        let text = MSH.replace("3 2 3\n2 1 3 1", "3 3 7\n2 1 3 1");
+        let err = parse(Path::new("bad.msh"), &text).unwrap_err().to_string();
+        assert!(
+            err.contains("physical group `bottom` has a node outside every quadrilateral"),
+            "{err}"
+        );
+    }
+
+    #[test]
+    fn unsupported_elements_are_named() {
+        let text = MSH.replace("2 1 3 1\n4 1 2 5 4", "2 1 2 1\n4 1 2 5");
+        let err = parse(Path::new("tri.msh"), &text).unwrap_err().to_string();
+        assert!(err.contains("3-node triangle"), "{err}");
+    }
 }

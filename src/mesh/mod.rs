@@ -1,9 +1,18 @@
 //! Meshes, node sets and the gmsh .msh 4.1 reader and writer.
 //!
 //! A [`Mesh`] is a quadrilateral surface mesh: node positions, 4-node
-//! elements, named node sets (gmsh physical groups) and, when the geometry is
+//! elements, named groups (gmsh physical groups) and, when the geometry is
 //! known exactly (built-in meshers), the exact unit normals used as reference
 //! directors; otherwise the directors are the averaged element normals.
+//!
+//! Groups come in three kinds, all under one name space:
+//! - node sets ([`Mesh::groups`], [`Mesh::group`]): every group, whatever its
+//!   dimension, as the sorted set of its nodes;
+//! - edge groups ([`Mesh::edge_groups`], [`Mesh::edges`]): the 2-node edges
+//!   of a curve group (gmsh physical curves), for line loads;
+//! - surface groups ([`Mesh::surface_groups`], [`Mesh::surface`]): the
+//!   quadrilaterals of a surface group (gmsh physical surfaces), for
+//!   pressures and tractions.
 
 pub mod gmsh;
 pub mod gmsh_write;
@@ -12,11 +21,11 @@ pub mod structured;
 use crate::error::{Error, Result};
 use nalgebra::Vector3;
 use std::collections::BTreeMap;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 pub type Vec3 = Vector3<f64>;
 
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, Default)]
 pub struct Mesh {
     /// Source file (or a `<built-in ...>` label) for error messages.
     pub file: PathBuf,
@@ -28,26 +37,115 @@ pub struct Mesh {
     pub quad_tags: Vec<usize>,
     /// Exact unit normals, when known.
     pub exact_normals: Option<Vec<Vec3>>,
-    /// Node sets by name (sorted, unique).
+    /// Node sets by name (sorted, unique): every group of every kind.
     pub groups: BTreeMap<String, Vec<usize>>,
+    /// Edges of the curve groups (node indices, in file order; built-in
+    /// meshes orient them along the increasing parameter).
+    pub edge_groups: BTreeMap<String, Vec<[usize; 2]>>,
+    /// Quadrilaterals (indices into `quads`) of the surface groups, sorted.
+    pub surface_groups: BTreeMap<String, Vec<usize>>,
 }
 
 impl Mesh {
     /// The node set `name`; the error names the mesh file, the scene key that
     /// asked for it, and the groups that exist.
-    pub fn group(&self, name: &str, scene: &std::path::Path, key: &str) -> Result<&[usize]> {
+    pub fn group(&self, name: &str, scene: &Path, key: &str) -> Result<&[usize]> {
         self.groups
             .get(name)
             .map(|v| v.as_slice())
-            .ok_or_else(|| Error::Invalid {
-                file: scene.to_path_buf(),
-                key: key.to_string(),
-                problem: format!(
-                    "physical group `{name}` not found in mesh {} (it has: {})",
-                    self.file.display(),
-                    self.groups.keys().cloned().collect::<Vec<_>>().join(", ")
-                ),
-            })
+            .ok_or_else(|| self.missing(name, scene, key))
+    }
+
+    /// The edges of the curve group `name`. Errors (naming the scene file,
+    /// the key, and the groups that exist): no such group, or a group with
+    /// no edges (a node or surface group).
+    pub fn edges(&self, name: &str, scene: &Path, key: &str) -> Result<&[[usize; 2]]> {
+        match self.edge_groups.get(name) {
+            Some(v) if !v.is_empty() => Ok(v),
+            _ => Err(self.wrong_kind(name, "edge", &self.edge_groups, scene, key)),
+        }
+    }
+
+    /// The quadrilaterals (indices into `quads`) of the surface group
+    /// `name`. Errors as for [`Mesh::edges`]: no such group, or a group with
+    /// no quadrilaterals (a node or edge group).
+    pub fn surface(&self, name: &str, scene: &Path, key: &str) -> Result<&[usize]> {
+        match self.surface_groups.get(name) {
+            Some(v) if !v.is_empty() => Ok(v),
+            _ => Err(self.wrong_kind(name, "surface", &self.surface_groups, scene, key)),
+        }
+    }
+
+    /// The kind of group `name`: "edge", "surface", "node" (a node set
+    /// only, e.g. gmsh physical points), or `None` if there is no such group.
+    pub fn group_kind(&self, name: &str) -> Option<&'static str> {
+        let has = |m: Option<usize>| m.is_some_and(|n| n > 0);
+        if has(self.edge_groups.get(name).map(Vec::len)) {
+            Some("edge")
+        } else if has(self.surface_groups.get(name).map(Vec::len)) {
+            Some("surface")
+        } else if self.groups.contains_key(name) {
+            Some("node")
+        } else {
+            None
+        }
+    }
+
+    fn missing(&self, name: &str, scene: &Path, key: &str) -> Error {
+        Error::Invalid {
+            file: scene.to_path_buf(),
+            key: key.to_string(),
+            problem: format!(
+                "physical group `{name}` not found in mesh {} (it has: {})",
+                self.file.display(),
+                self.groups.keys().cloned().collect::<Vec<_>>().join(", ")
+            ),
+        }
+    }
+
+    fn wrong_kind<T>(
+        &self,
+        name: &str,
+        want: &str,
+        of_kind: &BTreeMap<String, Vec<T>>,
+        scene: &Path,
+        key: &str,
+    ) -> Error {
+        let Some(kind) = self.group_kind(name) else {
+            return self.missing(name, scene, key);
+        };
+        let list: Vec<&str> = of_kind
+            .iter()
+            .filter(|(_, v)| !v.is_empty())
+            .map(|(k, _)| k.as_str())
+            .collect();
+        let a = |w: &str| {
+            if w.starts_with(['a', 'e', 'i', 'o', 'u']) {
+                "an"
+            } else {
+                "a"
+            }
+        };
+        Error::Invalid {
+            file: scene.to_path_buf(),
+            key: key.to_string(),
+            problem: format!(
+                "group `{name}` of mesh {} is {} {kind} group, not {} {want} group ({want} groups: {})",
+                self.file.display(),
+                a(kind),
+                a(want),
+                if list.is_empty() {
+                    "none".to_string()
+                } else {
+                    list.join(", ")
+                }
+            ),
+        }
+    }
+
+    /// The reference positions of the nodes of element `e`.
+    pub fn element_nodes(&self, e: usize) -> [Vec3; 4] {
+        std::array::from_fn(|i| self.nodes[self.quads[e][i]])
     }
 
     /// The node within `tol` of `p`, if any (the nearest one).

@@ -642,7 +642,7 @@ fn mesh(c: &Checker, path: &Path, m: &RawMesh) -> Result<Mesh> {
                         }
                     }
                     let (nx, ny) = divisions()?;
-                    crate::mesh_shim::sphere_patch(r, l0, l1, b0, b1, nx, ny)
+                    structured::sphere_patch(r, l0, l1, b0, b1, nx, ny)
                 }
                 "annulus" => {
                     unused("mesh.x", m.x.is_some(), kind)?;
@@ -668,7 +668,7 @@ fn mesh(c: &Checker, path: &Path, m: &RawMesh) -> Result<Mesh> {
                     }
                     let (a0, a1) = deg("mesh.angle", m.angle)?;
                     let (nr, nt) = divisions()?;
-                    crate::mesh_shim::annulus(r[0], r[1], a0, a1, nr, nt)
+                    structured::annulus(r[0], r[1], a0, a1, nr, nt)
                 }
                 other => {
                     return Err(c.fail(
