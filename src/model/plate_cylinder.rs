@@ -24,14 +24,14 @@
 use crate::contact::Obstacle;
 use crate::contact::search;
 use crate::error::{Error, Result};
-use crate::linalg::{SparseLu, norm};
+use crate::linalg::SparseLu;
 use crate::mesh::Vec3;
 use crate::output::plot::{Curve, Panel, draw};
 use crate::output::vtk::{PointData, cylinder_surface, write_pvd, write_vtu};
 use crate::output::{Stop, create_dir, write_csv, write_json};
 use crate::scene::shell::{ShellScene, load};
 use crate::series::continuation::{PathResult, PathStep, run};
-use crate::series::{ContinuationConfig, ContinuationProblem, Stats};
+use crate::series::{ContinuationConfig, ContinuationProblem, Stats, correct_at_lambda};
 use crate::shell::ShellModel;
 use serde::Serialize;
 use std::path::Path;
@@ -361,44 +361,34 @@ impl GridFix {
         let m = &mut self.model;
         // The active set of the step (from its start, as the engine's model).
         m.update_active(start_full);
-        let mut u = u;
-        let mut r = m.residual(&u, lambda)?;
-        let mut res = norm(&r) / self.load_norm;
-        if res <= cfg.residual_tol {
-            return Ok(u);
-        }
-        self.points += 1;
-        let mut it = 0;
-        while res > cfg.residual_tol || !res.is_finite() {
-            if it >= cfg.max_corrections || !res.is_finite() {
-                return Err(Error::NoConvergence {
-                    step,
-                    param: "lambda",
-                    at: lambda,
-                    iterations: it,
-                    residual: res,
-                    tolerance: cfg.residual_tol,
-                });
-            }
-            let (k, _) = m.tangent(&u, lambda)?;
-            let f = self
-                .lu
-                .factorize(&k)
-                .map_err(|detail| Error::SingularMatrix {
-                    step,
-                    param: "lambda",
-                    at: lambda,
-                    detail: format!("correcting the output grid point: {detail}"),
-                })?;
-            self.factorizations += 1;
-            let du = f.solve(&r.iter().map(|x| -x).collect::<Vec<_>>());
-            for (x, d) in u.iter_mut().zip(&du) {
-                *x += d;
-            }
-            r = m.residual(&u, lambda)?;
-            res = norm(&r) / self.load_norm;
-            it += 1;
-        }
+        let mut stats = Stats::default();
+        let (u, iterations) = correct_at_lambda(
+            m,
+            u,
+            lambda,
+            cfg.residual_tol,
+            self.load_norm,
+            cfg.max_corrections,
+            &mut self.lu,
+            &mut stats,
+            step,
+        )
+        .map_err(|e| match e {
+            Error::SingularMatrix {
+                step,
+                param,
+                at,
+                detail,
+            } => Error::SingularMatrix {
+                step,
+                param,
+                at,
+                detail: format!("correcting the output grid point: {detail}"),
+            },
+            e => e,
+        })?;
+        self.points += usize::from(iterations > 0);
+        self.factorizations += stats.factorizations;
         Ok(u)
     }
 }
@@ -574,8 +564,8 @@ pub fn run_loaded(scene: &ShellScene, out_dir: Option<&Path>, progress: bool) ->
         b.finish();
     }
     let (stop, uz_end) = {
-        let reason = result.stop.clone();
-        let message = match (&result.error, result.stop.as_str()) {
+        let reason = result.stop.reason().to_string();
+        let message = match (result.error(), result.stop.reason()) {
             (Some(e), _) => Some(e.to_string()),
             (None, "max_steps") => Some(format!(
                 "solver.max_steps = {} reached at lambda = {}",
