@@ -275,3 +275,42 @@ fn invalid_scales_stop_the_path() {
         "invalid_input"
     );
 }
+
+#[test]
+fn newton_arclength_takes_the_same_steps_in_m_and_mm_with_scaling() {
+    use anm::series::newton::{Control, NewtonConfig, run as newton};
+    let lambda_end = 2.0 * lambda_max();
+    let follow = |unit: f64, scaled: bool| {
+        let cfg = NewtonConfig {
+            control: Control::Arclength,
+            initial_step: 0.05,
+            max_step: 0.2,
+            tol: 1e-12,
+            lambda_end,
+            lambda_scale: if scaled { lambda_end } else { 1.0 },
+            ..Default::default()
+        };
+        let mut p = Truss::new(unit, 2, scaled);
+        let mut points = vec![];
+        let r = newton(&mut p, vec![0.0], 0.0, &cfg, &[], |u, l, _| {
+            points.push((u[0] / unit, l));
+            Ok(())
+        });
+        assert!(r.stop.is_end(), "{}", r.stop);
+        (points, r.stats.steps, r.stats.factorizations)
+    };
+    let (m, steps_m, facts_m) = follow(1.0, true);
+    let (mm, steps_mm, facts_mm) = follow(1000.0, true);
+    let (_, raw_m, _) = follow(1.0, false);
+    let (_, raw_mm, _) = follow(1000.0, false);
+    println!(
+        "Newton arclength steps (factorizations): scaled m {steps_m} ({facts_m}), mm {steps_mm} ({facts_mm}); unscaled m {raw_m}, mm {raw_mm}"
+    );
+    assert_eq!((steps_m, facts_m), (steps_mm, facts_mm));
+    let worst = m
+        .iter()
+        .zip(&mm)
+        .map(|((a, b), (c, d))| ((a - c).abs() / 0.1).max((b - d).abs() / lambda_max()))
+        .fold(0.0f64, f64::max);
+    assert!(worst <= 1e-8, "points differ by {worst:e}");
+}

@@ -91,6 +91,23 @@ impl Metric {
         })
     }
 
+    /// The metric of a problem: its [`ContinuationProblem::unknown_scale`]
+    /// (one per unknown) and `lambda_scale`.
+    pub fn for_problem<P: ContinuationProblem + ?Sized>(
+        problem: &P,
+        lambda_scale: f64,
+    ) -> Result<Self> {
+        let s = problem.unknown_scale();
+        if s.len() != problem.ndof() {
+            return Err(Error::Invalid {
+                file: Default::default(),
+                key: "unknown_scale".into(),
+                problem: format!("{} scales for {} unknowns", s.len(), problem.ndof()),
+            });
+        }
+        Self::new(&s, lambda_scale)
+    }
+
     /// Unit scales (the plain Euclidean metric).
     pub fn unit() -> Self {
         Self {

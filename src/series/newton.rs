@@ -85,7 +85,7 @@ pub fn run<P: ContinuationProblem>(
 ) -> NewtonResult {
     let mut stats = Stats::default();
     let mut lu = SparseLu::new();
-    let metric = match Metric::new(&problem.unknown_scale(), cfg.lambda_scale) {
+    let metric = match Metric::for_problem(&*problem, cfg.lambda_scale) {
         Ok(m) => m,
         Err(e) => {
             return NewtonResult {

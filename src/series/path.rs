@@ -111,8 +111,8 @@ impl<'p, P: ContinuationProblem> Path<'p, P> {
         } else {
             -1.0
         };
-        let (metric, stopped) = match Metric::new(&problem.unknown_scale(), cfg.lambda_scale)
-            .and_then(|m| {
+        let (metric, stopped) =
+            match Metric::for_problem(&*problem, cfg.lambda_scale).and_then(|m| {
                 if cp.u.len() == problem.ndof() {
                     Ok(m)
                 } else {
@@ -123,9 +123,9 @@ impl<'p, P: ContinuationProblem> Path<'p, P> {
                     })
                 }
             }) {
-            Ok(m) => (m, None),
-            Err(e) => (Metric::unit(), Some(Stop::Failed(e))),
-        };
+                Ok(m) => (m, None),
+                Err(e) => (Metric::unit(), Some(Stop::Failed(e))),
+            };
         Self {
             problem,
             cfg,
