@@ -314,3 +314,61 @@ fn newton_arclength_takes_the_same_steps_in_m_and_mm_with_scaling() {
         .fold(0.0f64, f64::max);
     assert!(worst <= 1e-8, "points differ by {worst:e}");
 }
+
+#[test]
+fn correct_at_lambda_returns_to_the_path_at_fixed_load() {
+    use anm::linalg::SparseLu;
+    use anm::series::{Stats, correct_at_lambda};
+    // On the first stable branch, w = 0.02 m; lambda from the closed form.
+    let w = 0.02;
+    let lambda = lambda_exact(w);
+    let mut p = Truss::new(1.0, 2, true);
+    let (mut lu, mut stats) = (SparseLu::new(), Stats::default());
+    let (u, it) = correct_at_lambda(
+        &mut p,
+        vec![1.05 * w],
+        lambda,
+        1e-12,
+        P_REF,
+        20,
+        &mut lu,
+        &mut stats,
+        0,
+    )
+    .unwrap();
+    println!(
+        "fixed-load correction: {it} iterations, {} factorizations, w error {:.1e}",
+        stats.factorizations,
+        (u[0] - w).abs() / w
+    );
+    assert!(it > 0 && stats.factorizations == it, "full Newton");
+    assert!((u[0] - w).abs() <= 1e-9 * w);
+    // A point on the path costs one residual and no iteration.
+    let (u2, it2) = correct_at_lambda(
+        &mut p,
+        u.clone(),
+        lambda,
+        1e-12,
+        P_REF,
+        20,
+        &mut lu,
+        &mut stats,
+        0,
+    )
+    .unwrap();
+    assert_eq!((it2, u2[0].to_bits()), (0, u[0].to_bits()));
+    // Too few iterations: no convergence, with the values.
+    let e = correct_at_lambda(
+        &mut p,
+        vec![1.5 * w],
+        lambda,
+        1e-14,
+        P_REF,
+        1,
+        &mut lu,
+        &mut stats,
+        3,
+    )
+    .unwrap_err();
+    assert_eq!(e.kind(), "no_convergence", "{e}");
+}

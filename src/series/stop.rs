@@ -34,14 +34,26 @@ impl Stop {
         }
     }
 
-    /// The load parameter where the path stopped, when the stop knows it
-    /// (a failure carries its own value in the error message).
+    /// The load parameter where the path stopped: for a failure, the lambda
+    /// its error reports (none for input, I/O or output errors, nor for
+    /// errors in time t).
     pub fn lambda(&self) -> Option<f64> {
         match self {
             Stop::End { lambda } | Stop::MaxSteps { lambda, .. } | Stop::Interrupted { lambda } => {
                 Some(*lambda)
             }
-            Stop::Failed(_) => None,
+            Stop::Failed(e) => match e {
+                Error::SingularMatrix { param, at, .. }
+                | Error::NoConvergence { param, at, .. }
+                | Error::NonFinite { param, at, .. }
+                | Error::StepCollapse { param, at, .. }
+                | Error::ContactMissed { param, at, .. }
+                    if *param == "lambda" =>
+                {
+                    Some(*at)
+                }
+                _ => None,
+            },
         }
     }
 
