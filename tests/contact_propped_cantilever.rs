@@ -46,7 +46,11 @@ fn tip_reaction_on_a_plane_matches_the_propped_cantilever() {
     };
     let n0 = anm::series::ContinuationProblem::ndof(&m);
     let res = run(&mut m, vec![0.0; n0], 0.0, &cfg, |_, _| Ok(()));
-    assert!(res.error.is_none() && res.stop == "end", "{:?}", res.error);
+    assert!(
+        res.error().is_none() && res.stop == "end",
+        "{:?}",
+        res.error()
+    );
     let full = m.expand(&res.u_end, res.lambda_end);
     let forces = m.contact_forces(&full, res.lambda_end).unwrap();
     let r: f64 = forces.iter().map(|c| c.r).sum();
@@ -91,7 +95,11 @@ fn contact_outside_the_search_distance_shortens_the_step() {
     };
     let n0 = anm::series::ContinuationProblem::ndof(&m);
     let res = run(&mut m, vec![0.0; n0], 0.0, &cfg, |_, _| Ok(()));
-    assert!(res.error.is_none() && res.stop == "end", "{:?}", res.error);
+    assert!(
+        res.error().is_none() && res.stop == "end",
+        "{:?}",
+        res.error()
+    );
     let full = m.expand(&res.u_end, res.lambda_end);
     let forces = m.contact_forces(&full, res.lambda_end).unwrap();
     let r: f64 = forces.iter().map(|c| c.r).sum();

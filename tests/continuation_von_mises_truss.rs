@@ -70,7 +70,7 @@ fn follow_eps(pade: bool, eps: f64) -> (f64, usize, usize, f64) {
         }
         Ok(())
     });
-    assert_eq!(result.stop, "end", "{:?}", result.error);
+    assert_eq!(result.stop, "end", "{:?}", result.error());
     (
         worst,
         result.stats.steps,
@@ -155,7 +155,7 @@ fn pade_covers_more_path_in_the_same_steps_on_a_30_dof_problem() {
             length += step.length;
             Ok(())
         });
-        assert_eq!(result.stop, "max_steps", "{:?}", result.error);
+        assert_eq!(result.stop, "max_steps", "{:?}", result.error());
         println!(
             "{:<11} {worst:<11.2e} {:<6} {length:.4}",
             if pade { "ANM+Pade" } else { "ANM" },
@@ -210,9 +210,11 @@ fn newton_baseline_follows_the_same_path() {
     });
     println!(
         "Newton arclength: stop {}, {} steps, {} factorizations, error {worst:.1e}, targets hit {hits:?}",
-        r.stop, r.stats.steps, r.stats.factorizations
+        r.stop.reason(),
+        r.stats.steps,
+        r.stats.factorizations
     );
-    assert_eq!(r.stop, "end", "{:?}", r.error);
+    assert_eq!(r.stop, "end", "{:?}", r.error());
     assert!(w_max > 2.0 * H);
     assert!(worst <= 1e-10, "error {worst:e}");
     assert!(hits.len() >= 3, "targets hit: {hits:?}");
@@ -231,7 +233,7 @@ fn newton_baseline_follows_the_same_path() {
     });
     println!(
         "Newton load control: stop {}; first point past lambda_max: {snapped:?}",
-        r.stop
+        r.stop.reason()
     );
     let (_, w) = snapped.expect("a converged point past lambda_max");
     assert!(

@@ -107,7 +107,7 @@ fn series_terms_match_the_residual_along_the_series() {
         steps.push(s.clone());
         Ok(())
     });
-    assert!(res.error.is_none(), "{:?}", res.error);
+    assert!(res.error().is_none(), "{:?}", res.error());
     // Second step: starts from a deformed, stressed, contacting state.
     let s = &steps[1];
     let (_, rl) = m.tangent(&s.u[0], s.lambda[0]).unwrap();

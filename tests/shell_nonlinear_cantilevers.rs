@@ -62,7 +62,11 @@ fn tip_path(m: &mut ShellModel, tip: &[usize], targets: &[f64]) -> (Vec<Vec3>, u
         steps.push(s.clone());
         Ok(())
     });
-    assert!(res.error.is_none() && res.stop == "end", "{:?}", res.error);
+    assert!(
+        res.error().is_none() && res.stop == "end",
+        "{:?}",
+        res.error()
+    );
     let mut out = vec![];
     for &lt in targets {
         let (u, lambda) = steps

@@ -111,7 +111,7 @@ fn plate_cylinder_step_cost() {
         cfg.lambda_end = 0.3;
         let n = m.ndof();
         let res = run(&mut m, vec![0.0; n], 0.0, &cfg, |_, _| Ok(()));
-        assert!(res.error.is_none(), "{:?}", res.error);
+        assert!(res.error().is_none(), "{:?}", res.error());
         assert!(!m.active_pairs().is_empty(), "contact must be active");
         let order = cfg.order;
         let (u0, l0) = (res.u_end, res.lambda_end);

@@ -252,6 +252,17 @@ fn run_inner(
         rec.vtk(&model, &full0, 0.0, "shell_0000.vtu")?;
     }
     let mut grid_lu = SparseLu::new();
+    // Grid points are held to |R| / |F| <= residual_tol; with prescribed
+    // displacements only (no load), |F| is the norm of the lambda column.
+    let f_norm = {
+        let f = super::build::load_norm(&model);
+        if f > 0.0 {
+            f
+        } else {
+            let (_, rl) = model.tangent(&zero, 0.0)?;
+            crate::linalg::norm(&rl).max(f64::MIN_POSITIVE)
+        }
+    };
     let mut grid_stats = Stats::default();
     let far_skipped = model.search_distance.is_finite() && !model.pairs.is_empty();
     let method_name;
@@ -297,6 +308,7 @@ fn run_inner(
                         u,
                         g,
                         cfg.residual_tol,
+                        f_norm,
                         cfg.max_corrections,
                         &mut grid_lu,
                         &mut grid_stats,

@@ -4,17 +4,23 @@
 //! detection and statistics.
 
 pub mod continuation;
+pub mod correct;
 pub mod dae;
 pub mod geometric;
 pub mod newton;
 pub mod pade;
+pub mod path;
 pub mod stats;
+pub mod stop;
 pub mod tape;
 pub mod tape_problem;
 pub mod taylor;
 
-pub use continuation::{ContinuationConfig, ContinuationProblem, PathStep};
+pub use continuation::{ContinuationConfig, ContinuationProblem, PathResult, PathStep};
+pub use correct::{Metric, correct_at_lambda};
 pub use dae::{DaeConfig, DaeProblem, TimeStep};
+pub use path::{Checkpoint, Path};
 pub use stats::Stats;
+pub use stop::Stop;
 pub use tape::{Tape, TapeBuilder, Var};
 pub use tape_problem::TapeProblem;

@@ -12,11 +12,20 @@
 //! (a hyperplane through the predictor, orthogonal to the prediction).
 //! The increment grows after fast convergence and is halved on failure. Steps
 //! are cut so that every requested lambda in `targets` is hit exactly.
+//!
+//! Lengths are those of the ANM ([`super::correct::Metric`]): the arclength
+//! increment, the unit tangent and secant, and the hyperplane are measured in
+//! u_i / s_i ([`ContinuationProblem::unknown_scale`]) and
+//! lambda / `lambda_scale`, so that `initial_step`, `max_step` and `min_step`
+//! (arclength control) do not depend on the problem's units. The corrections
+//! are those of [`super::correct::correct`] in its full-Newton mode.
 
 use super::continuation::{ContinuationProblem, PathResult, factorize};
+use super::correct::{self, Constraint, Jacobian, Metric, Settings};
 use super::stats::{Stats, charge};
+use super::stop::Stop;
 use crate::error::{Error, Result};
-use crate::linalg::{SparseLu, dot, norm};
+use crate::linalg::SparseLu;
 use std::time::Instant;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -39,6 +48,9 @@ pub struct NewtonConfig {
     pub easy_iterations: usize,
     pub lambda_end: f64,
     pub max_steps: usize,
+    /// Characteristic range Lambda of lambda in the arclength (as
+    /// `ContinuationConfig::lambda_scale`); default 1.
+    pub lambda_scale: f64,
 }
 
 impl Default for NewtonConfig {
@@ -53,6 +65,7 @@ impl Default for NewtonConfig {
             easy_iterations: 4,
             lambda_end: 1.0,
             max_steps: 100_000,
+            lambda_scale: 1.0,
         }
     }
 }
@@ -72,6 +85,17 @@ pub fn run<P: ContinuationProblem>(
 ) -> NewtonResult {
     let mut stats = Stats::default();
     let mut lu = SparseLu::new();
+    let metric = match Metric::for_problem(&*problem, cfg.lambda_scale) {
+        Ok(m) => m,
+        Err(e) => {
+            return NewtonResult {
+                stats,
+                stop: Stop::Failed(e),
+                u_end: u0,
+                lambda_end: lambda0,
+            };
+        }
+    };
     let mut u = u0;
     let mut lambda = lambda0;
     let forward = if cfg.lambda_end >= lambda0 { 1.0 } else { -1.0 };
@@ -90,27 +114,25 @@ pub fn run<P: ContinuationProblem>(
     {
         pending.push(cfg.lambda_end);
     }
-    let done = |stats: Stats, stop: &str, error: Option<Error>, u: Vec<f64>, l: f64| NewtonResult {
-        stop: error
-            .as_ref()
-            .map(|e| e.kind().to_string())
-            .unwrap_or_else(|| stop.to_string()),
+    let done = |stats: Stats, stop: Stop, u: Vec<f64>, l: f64| NewtonResult {
+        stop,
         stats,
-        error,
         u_end: u,
         lambda_end: l,
     };
     for index in 0..cfg.max_steps {
         if pending.is_empty() {
-            return done(stats, "end", None, u, lambda);
+            return done(stats, Stop::End { lambda }, u, lambda);
         }
         // Predictor direction: previous secant, or the tangent at the start.
         let (du, dl) = match &dir {
             Some(d) => d.clone(),
             None => {
-                match tangent_direction(problem, &u, lambda, forward, &mut lu, &mut stats, index) {
+                match tangent_direction(
+                    problem, &u, lambda, forward, &metric, &mut lu, &mut stats, index,
+                ) {
                     Ok(d) => d,
-                    Err(e) => return done(stats, "", Some(e), u, lambda),
+                    Err(e) => return done(stats, Stop::Failed(e), u, lambda),
                 }
             }
         };
@@ -151,19 +173,20 @@ pub fn run<P: ContinuationProblem>(
             hit_target = true;
         }
         let converged = match correct(
-            problem, &up, lp, control, &du, dl, cfg, &mut lu, &mut stats, index,
+            problem, &up, lp, control, &du, dl, cfg, &metric, &mut lu, &mut stats, index,
         ) {
             // A corrector that converged onto the path behind us (the
             // increment turns back on the predictor direction) has lost the
             // path: it is retried with half the increment, like a failure.
             Ok((un, ln, _))
-                if control == Control::Arclength && turns_back(&un, ln, &u, lambda, &du, dl) =>
+                if control == Control::Arclength
+                    && turns_back(&un, ln, &u, lambda, &du, dl, &metric) =>
             {
                 None
             }
             Ok(point) => Some(point),
             Err(e) if e.is_numerical() => None,
-            Err(e) => return done(stats, "", Some(e), u, lambda),
+            Err(e) => return done(stats, Stop::Failed(e), u, lambda),
         };
         // An arclength corrector may pass the next target: that target is
         // then solved for by load control from the interpolated point, so
@@ -181,22 +204,25 @@ pub fn run<P: ContinuationProblem>(
                     &du,
                     dl,
                     cfg,
+                    &metric,
                     &mut lu,
                     &mut stats,
                     index,
                 ) {
                     Ok((ut, lt, it)) => Some((ut, lt, iterations + it)),
                     Err(e) if e.is_numerical() => None,
-                    Err(e) => return done(stats, "", Some(e), u, lambda),
+                    Err(e) => return done(stats, Stop::Failed(e), u, lambda),
                 }
             }
             other => other,
         };
         match converged {
             Some((un, ln, iterations)) => {
+                // Unit secant in the scaled metric: |inc|~^2 + (dln / Lambda)^2 = 1.
                 let inc: Vec<f64> = un.iter().zip(&u).map(|(a, b)| a - b).collect();
                 let dln = ln - lambda;
-                let len = (dot(&inc, &inc) + dln * dln).sqrt();
+                let dls = metric.l(dln);
+                let len = (metric.dot_u(&inc, &inc) + dls * dls).sqrt();
                 stats.steps += 1;
                 if len > 0.0 {
                     dir = Some((inc.iter().map(|x| x / len).collect(), dln / len));
@@ -207,7 +233,7 @@ pub fn run<P: ContinuationProblem>(
                     pending.remove(0);
                 }
                 if let Err(e) = on_point(&u, lambda, &stats) {
-                    return done(stats, "", Some(e), u, lambda);
+                    return done(stats, Stop::Failed(e), u, lambda);
                 }
                 if iterations <= cfg.easy_iterations && !hit_target {
                     step = (1.5 * step).min(cfg.max_step);
@@ -222,30 +248,39 @@ pub fn run<P: ContinuationProblem>(
                 at: lambda,
                 length: step,
             };
-            return done(stats, "", Some(collapse), u, lambda);
+            return done(stats, Stop::Failed(collapse), u, lambda);
         }
     }
-    done(stats, "max_steps", None, u, lambda)
+    let steps = cfg.max_steps;
+    done(stats, Stop::MaxSteps { steps, lambda }, u, lambda)
 }
 
 /// Whether the increment from (u, lambda) to (un, ln) points against the
-/// predictor direction (du, dl).
-fn turns_back(un: &[f64], ln: f64, u: &[f64], lambda: f64, du: &[f64], dl: f64) -> bool {
-    let along: f64 = un
-        .iter()
-        .zip(u)
-        .zip(du)
-        .map(|((a, b), d)| (a - b) * d)
-        .sum();
-    along + (ln - lambda) * dl < 0.0
+/// predictor direction (du, dl): <un - u, du>~ + (ln - lambda) dl / Lambda^2 < 0.
+fn turns_back(
+    un: &[f64],
+    ln: f64,
+    u: &[f64],
+    lambda: f64,
+    du: &[f64],
+    dl: f64,
+    metric: &Metric,
+) -> bool {
+    let inc: Vec<f64> = un.iter().zip(u).map(|(a, b)| a - b).collect();
+    let along = metric.dot_u(&inc, du);
+    along + (ln - lambda) * dl * metric.lambda_weight() < 0.0
 }
 
-/// Unit tangent (U1, lambda1) at a point: Kt Ut = -R_lambda, oriented forward.
+/// Unit tangent (U1, lambda1) at a point, |Ũ1|^2 + λ̃1^2 = 1: Kt Ut = -R_lambda,
+/// λ̃1 = ±1 / sqrt(1 + Lambda^2 |Ut|~^2), lambda1 = Lambda λ̃1, U1 = lambda1 Ut,
+/// oriented forward.
+#[allow(clippy::too_many_arguments)]
 fn tangent_direction<P: ContinuationProblem>(
     problem: &mut P,
     u: &[f64],
     lambda: f64,
     forward: f64,
+    metric: &Metric,
     lu: &mut SparseLu,
     stats: &mut Stats,
     index: usize,
@@ -258,11 +293,14 @@ fn tangent_direction<P: ContinuationProblem>(
     let ut = f.solve(&rl.iter().map(|x| -x).collect::<Vec<_>>());
     stats.solves += 1;
     charge(&mut stats.solve_s, t);
-    let l1 = forward / (1.0 + dot(&ut, &ut)).sqrt();
+    let big_l = metric.lambda_scale();
+    let l1 = big_l * forward / (1.0 + metric.dot_u(&ut, &ut) * (big_l * big_l)).sqrt();
     Ok((ut.iter().map(|x| x * l1).collect(), l1))
 }
 
-/// Full Newton from the predictor; returns the converged point and the iterations used.
+/// Full Newton from the predictor (load control: lambda fixed; arclength:
+/// on the hyperplane through the predictor orthogonal to (du, dl)), by
+/// [`correct::correct`]; returns the converged point and the iterations used.
 #[allow(clippy::too_many_arguments)]
 fn correct<P: ContinuationProblem>(
     problem: &mut P,
@@ -272,76 +310,35 @@ fn correct<P: ContinuationProblem>(
     du: &[f64],
     dl: f64,
     cfg: &NewtonConfig,
+    metric: &Metric,
     lu: &mut SparseLu,
     stats: &mut Stats,
     index: usize,
 ) -> Result<(Vec<f64>, f64, usize)> {
-    let mut u = up.to_vec();
-    let mut l = lp;
-    for it in 0..=cfg.max_iterations {
-        // Tangent first: a problem may refresh state there (e.g. the active
-        // contact set at the current iterate) that its residual relies on.
-        let t = Instant::now();
-        let (k, rl) = problem.tangent(&u, l)?;
-        charge(&mut stats.assembly_s, t);
-        let t = Instant::now();
-        let r = problem.residual(&u, l)?;
-        stats.residual_evaluations += 1;
-        charge(&mut stats.assembly_s, t);
-        let res = norm(&r) / norm(&rl).max(f64::MIN_POSITIVE);
-        if !res.is_finite() {
-            return Err(Error::NonFinite {
-                step: index,
-                param: "lambda",
-                at: l,
-                what: "residual".into(),
-            });
-        }
-        if res <= cfg.tol {
-            return Ok((u, l, it));
-        }
-        if it == cfg.max_iterations {
-            return Err(Error::NoConvergence {
-                step: index,
-                param: "lambda",
-                at: l,
-                iterations: it,
-                residual: res,
-                tolerance: cfg.tol,
-            });
-        }
-        let f = factorize(lu, &k, stats, index, l)?;
-        let t = Instant::now();
-        let ur = f.solve(&r.iter().map(|x| -x).collect::<Vec<_>>());
-        stats.solves += 1;
-        let dlam = match control {
-            Control::Load => 0.0,
-            Control::Arclength => {
-                // Bordered solve: dU = ur + dlam ut with Kt ut = -R_lambda and
-                // <dU + (U - U_p), t_U> + (dlam + l - l_p) t_l = 0.
-                let ut = f.solve(&rl.iter().map(|x| -x).collect::<Vec<_>>());
-                stats.solves += 1;
-                let offset: f64 = u
-                    .iter()
-                    .zip(up)
-                    .zip(du)
-                    .map(|((a, b), d)| (a - b) * d)
-                    .sum::<f64>()
-                    + (l - lp) * dl;
-                let num = -(dot(&ur, du) + offset);
-                let den = dot(&ut, du) + dl;
-                let dlam = num / den;
-                for (x, y) in u.iter_mut().zip(&ut) {
-                    *x += dlam * y;
-                }
-                dlam
-            }
-        };
-        charge(&mut stats.solve_s, t);
-        for (x, y) in u.iter_mut().zip(&ur) {
-            *x += y;
-        }
-        l += dlam;
-    }
-    unreachable!("the loop returns on its last iteration")
+    let constraint = match control {
+        Control::Load => Constraint::FixedLambda,
+        Control::Arclength => Constraint::Arclength {
+            t_u: du,
+            t_lambda: dl,
+            reference: Some((up, lp)),
+        },
+    };
+    let settings = Settings {
+        tol: cfg.tol,
+        max_iter: cfg.max_iterations,
+        jacobian: Jacobian::Fresh,
+        max_residual: f64::INFINITY,
+        step: index,
+    };
+    let c = correct::correct(
+        problem,
+        up.to_vec(),
+        lp,
+        &constraint,
+        &settings,
+        metric,
+        lu,
+        stats,
+    )?;
+    Ok((c.u, c.lambda, c.iterations))
 }

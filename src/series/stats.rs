@@ -1,9 +1,9 @@
 //! Counters and timers of a run: what a step costs and where the time goes.
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use std::time::Instant;
 
-#[derive(Clone, Debug, Default, Serialize)]
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
 pub struct Stats {
     /// Accepted steps.
     pub steps: usize,

@@ -470,6 +470,10 @@ impl ContinuationProblem for ShellModel {
         self.ndof
     }
 
+    fn unknown_scale(&self) -> Vec<f64> {
+        self.scales()
+    }
+
     fn residual(&mut self, u: &[f64], lambda: f64) -> Result<Vec<f64>> {
         let full = self.expand(u, lambda);
         self.check_inactive(&full, lambda)?;

@@ -1,0 +1,506 @@
+//! Caller-driven ANM path following: [`Path::step`] computes one accepted
+//! step at a time; the caller decides what to do with it (outputs, grid
+//! points, checkpoints) and whether to go on.
+//!
+//! One step from (U0, lambda0) (DESIGN §2; Cochelin, Damil, Potier-Ferry,
+//! Rev. Eur. Eléments Finis 3 (1994) 281–297), in the scaled variables
+//! ũ_i = u_i / s_i, λ̃ = lambda / Lambda of [`Metric`] (s_i from
+//! [`ContinuationProblem::unknown_scale`], Lambda = `cfg.lambda_scale`):
+//!
+//! ```text
+//! 1. Kt = dR/dU and R_lambda at (U0, lambda0), factorized once;
+//!    U_t = -Kt^-1 R_lambda (= dU/dlambda on the path).
+//! 2. Order 1 (O1): U_1 = lambda_1 U_t with |Ũ_1|^2 + λ̃_1^2 = 1:
+//!    λ̃_1 = ±1 / sqrt(1 + Lambda^2 <U_t, U_t>~),  lambda_1 = Lambda λ̃_1;
+//!    the sign makes <Ũ_1, Ũ_1'> + λ̃_1 λ̃_1' > 0 with the previous step's
+//!    direction (U_1', lambda_1'), or lambda_1 point toward lambda_end on
+//!    the first step.
+//! 3. Order p = 2..N (Op): Kt U_p + R_lambda lambda_p + rhs_p = 0 and
+//!    <Ũ_p, Ũ_1> + λ̃_p λ̃_1 = 0:
+//!    U_b = -Kt^-1 rhs_p,
+//!    lambda_p = -<U_b, U_1>~ / (<U_t, U_1>~ + lambda_1 / Lambda^2),
+//!    U_p = lambda_p U_t + U_b.
+//!    The path parameter is the scaled pseudo-arclength
+//!    a = <U - U0, U_1>~ + (lambda - lambda0) lambda_1 / Lambda^2,
+//!    and the terms stay in the problem's units:
+//!    U(a) = U0 + sum a^p U_p,  lambda(a) = lambda0 + sum a^p lambda_p.
+//! 4. Step length (L), on the stacked scaled terms T̃_p = (Ũ_p, λ̃_p):
+//!    a_max = min((eps |T̃_1| / |T̃_N|)^(1/(N-1)), 1e15^(1/N));
+//!    with Padé, the range where |P_N - P_{N-1}| <= eps |P_N| (pade::range
+//!    on T̃) below 0.95 of the first pole, up to 10 a_max. The
+//!    Cochelin-Medale geometric-series test reads T̃ too; min_step bounds a.
+//! 5. Step end: residual check |R| / |R_lambda| <= residual_tol, else the
+//!    arclength-constrained correction <dŨ, Ũ_1> + dλ̃ λ̃_1 = 0
+//!    (super::correct), else the step halved.
+//! ```
+//!
+//! With every scale 1 this is exactly the unscaled method.
+
+use super::continuation::{ContinuationConfig, ContinuationProblem, PathStep, factorize};
+use super::correct::{self, Constraint, Jacobian, Metric, Settings};
+use super::geometric;
+use super::pade;
+use super::stats::{Stats, charge};
+use super::stop::Stop;
+use crate::error::{Error, Result};
+use crate::linalg::{Factorization, SparseLu, norm};
+use serde::{Deserialize, Serialize};
+use std::time::Instant;
+
+/// The state after an accepted step: enough to resume the path exactly
+/// ([`Path::resume`]). Floating-point values are serialized as their bit
+/// patterns (u64), so that they round-trip exactly through any serde format.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct Checkpoint {
+    /// Index of the next step (= accepted steps so far).
+    pub index: usize,
+    #[serde(with = "bits::vec")]
+    pub u: Vec<f64>,
+    #[serde(with = "bits::scalar")]
+    pub lambda: f64,
+    /// (U_1, lambda_1) of the last step, which orients the next one.
+    #[serde(with = "bits::dir")]
+    pub prev_dir: Option<(Vec<f64>, f64)>,
+    pub stats: Stats,
+}
+
+/// Caller-driven stepper of the static ANM path (module docs).
+pub struct Path<'p, P: ContinuationProblem> {
+    problem: &'p mut P,
+    cfg: ContinuationConfig,
+    metric: Metric,
+    u: Vec<f64>,
+    lambda: f64,
+    prev_dir: Option<(Vec<f64>, f64)>,
+    index: usize,
+    forward: f64,
+    lu: SparseLu,
+    stats: Stats,
+    stopped: Option<Stop>,
+}
+
+impl<'p, P: ContinuationProblem> Path<'p, P> {
+    /// A path from (u0, lambda0) toward `cfg.lambda_end`. Invalid scales
+    /// (non-positive or non-finite) make the first [`Path::step`] fail.
+    pub fn new(problem: &'p mut P, u0: Vec<f64>, lambda0: f64, cfg: ContinuationConfig) -> Self {
+        Self::build(
+            problem,
+            Checkpoint {
+                index: 0,
+                u: u0,
+                lambda: lambda0,
+                prev_dir: None,
+                stats: Stats::default(),
+            },
+            cfg,
+        )
+    }
+
+    /// Resumes exactly where `cp` was taken: the later steps are those of an
+    /// uninterrupted run, bit for bit, as far as the problem (and the sparse
+    /// pattern it hands the factorization) is deterministic. The step
+    /// counters continue from the checkpoint's; `cfg` should be the run's
+    /// (a different `lambda_end` or `max_steps` is allowed).
+    pub fn resume(problem: &'p mut P, cp: Checkpoint, cfg: ContinuationConfig) -> Self {
+        Self::build(problem, cp, cfg)
+    }
+
+    fn build(problem: &'p mut P, cp: Checkpoint, cfg: ContinuationConfig) -> Self {
+        let forward = if cfg.lambda_end >= cp.lambda {
+            1.0
+        } else {
+            -1.0
+        };
+        let (metric, stopped) =
+            match Metric::for_problem(&*problem, cfg.lambda_scale).and_then(|m| {
+                if cp.u.len() == problem.ndof() {
+                    Ok(m)
+                } else {
+                    Err(Error::Invalid {
+                        file: Default::default(),
+                        key: "u0".into(),
+                        problem: format!("{} values for {} unknowns", cp.u.len(), problem.ndof()),
+                    })
+                }
+            }) {
+                Ok(m) => (m, None),
+                Err(e) => (Metric::unit(), Some(Stop::Failed(e))),
+            };
+        Self {
+            problem,
+            cfg,
+            metric,
+            u: cp.u,
+            lambda: cp.lambda,
+            prev_dir: cp.prev_dir,
+            index: cp.index,
+            forward,
+            lu: SparseLu::new(),
+            stats: cp.stats,
+            stopped,
+        }
+    }
+
+    /// One accepted step, or why the path ended (`End` when the step before
+    /// reached `lambda_end`, `MaxSteps` after `cfg.max_steps` steps in all,
+    /// `Failed` on a numerical error). After a stop every further call
+    /// returns the same stop (a failure's error is reproduced, not re-run).
+    pub fn step(&mut self) -> std::result::Result<PathStep, Stop> {
+        if let Some(s) = &self.stopped {
+            return Err(s.clone());
+        }
+        let cfg = &self.cfg;
+        let stop = if self.index > 0
+            && (self.lambda - cfg.lambda_end) * self.forward
+                >= -1e-14 * cfg.lambda_end.abs().max(1.0)
+        {
+            Some(Stop::End {
+                lambda: self.lambda,
+            })
+        } else if self.index >= cfg.max_steps {
+            Some(Stop::MaxSteps {
+                steps: self.index,
+                lambda: self.lambda,
+            })
+        } else {
+            None
+        };
+        if let Some(s) = stop {
+            self.stopped = Some(s.clone());
+            return Err(s);
+        }
+        match series_step(
+            &mut *self.problem,
+            &self.u,
+            self.lambda,
+            self.index,
+            &self.cfg,
+            &self.metric,
+            &self.prev_dir,
+            self.forward,
+            &mut self.lu,
+            &mut self.stats,
+        ) {
+            Ok(step) => {
+                self.stats.steps += 1;
+                self.index += 1;
+                self.u.clone_from(&step.u_end);
+                self.lambda = step.lambda_end;
+                self.prev_dir = Some((step.u[1].clone(), step.lambda[1]));
+                Ok(step)
+            }
+            Err(e) => {
+                let s = Stop::Failed(e);
+                self.stopped = Some(s.clone());
+                Err(s)
+            }
+        }
+    }
+
+    /// The state after the last accepted step.
+    pub fn checkpoint(&self) -> Checkpoint {
+        Checkpoint {
+            index: self.index,
+            u: self.u.clone(),
+            lambda: self.lambda,
+            prev_dir: self.prev_dir.clone(),
+            stats: self.stats.clone(),
+        }
+    }
+
+    pub fn stats(&self) -> &Stats {
+        &self.stats
+    }
+
+    /// The problem (e.g. for output grid corrections between steps).
+    pub fn problem(&mut self) -> &mut P {
+        self.problem
+    }
+
+    /// Current (U, lambda): the end of the last accepted step.
+    pub fn state(&self) -> (&[f64], f64) {
+        (&self.u, self.lambda)
+    }
+
+    /// The scaled metric of the path.
+    pub fn metric(&self) -> &Metric {
+        &self.metric
+    }
+
+    /// Whether `lambda` (the end of the last step) has reached `lambda_end`.
+    pub fn at_end(&self) -> bool {
+        self.index > 0
+            && (self.lambda - self.cfg.lambda_end) * self.forward
+                >= -1e-14 * self.cfg.lambda_end.abs().max(1.0)
+    }
+
+    pub fn config(&self) -> &ContinuationConfig {
+        &self.cfg
+    }
+}
+
+/// One ANM step from (u0, lambda0) (module docs, items 1-5).
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn series_step<P: ContinuationProblem + ?Sized>(
+    problem: &mut P,
+    u0: &[f64],
+    lambda0: f64,
+    index: usize,
+    cfg: &ContinuationConfig,
+    metric: &Metric,
+    prev_dir: &Option<(Vec<f64>, f64)>,
+    forward: f64,
+    lu: &mut SparseLu,
+    stats: &mut Stats,
+) -> Result<PathStep> {
+    let n_ord = cfg.order;
+    let t = Instant::now();
+    let (kt, r_lambda) = problem.tangent(u0, lambda0)?;
+    charge(&mut stats.assembly_s, t);
+    let fact = factorize(lu, &kt, stats, index, lambda0)?;
+    let solve = |b: &[f64], stats: &mut Stats, what: &str| -> Result<Vec<f64>> {
+        let t = Instant::now();
+        let neg: Vec<f64> = b.iter().map(|x| -x).collect();
+        let x = Factorization::solve(&fact, &neg);
+        stats.solves += 1;
+        charge(&mut stats.solve_s, t);
+        if x.iter().all(|v| v.is_finite()) {
+            Ok(x)
+        } else {
+            Err(Error::SingularMatrix {
+                step: index,
+                param: "lambda",
+                at: lambda0,
+                detail: format!("non-finite solution of the {what} system"),
+            })
+        }
+    };
+    // Order 1 (eq. O1): λ̃_1 = ±1/sqrt(1 + Lambda^2 |U_t|~^2); U_1 = lambda_1 U_t.
+    let ut = solve(&r_lambda, stats, "order-1")?;
+    let big_l = metric.lambda_scale();
+    let mut l1 = 1.0 / (1.0 + metric.dot_u(&ut, &ut) * (big_l * big_l)).sqrt();
+    // Sign of <Ũ_1, Ũ_1'> + λ̃_1 λ̃_1' = (λ̃_1 / Lambda)(Lambda^2 <U_t, U_1'>~ + lambda_1').
+    let orient = match prev_dir {
+        Some((pu, pl)) => l1 * (metric.dot_u(&ut, pu) * (big_l * big_l) + pl),
+        None => l1 * forward,
+    };
+    if orient < 0.0 {
+        l1 = -l1;
+    }
+    let lambda1 = big_l * l1;
+    let mut us = vec![
+        u0.to_vec(),
+        ut.iter().map(|x| lambda1 * x).collect::<Vec<_>>(),
+    ];
+    let mut ls = vec![lambda0, lambda1];
+    // <U_t, U_1>~ + lambda_1 / Lambda^2 (eq. Op).
+    let denom = metric.dot_u(&ut, &us[1]) + lambda1 * metric.lambda_weight();
+    for p in 2..=n_ord {
+        let t = Instant::now();
+        let rhs = problem.series_rhs(p, &us, &ls)?;
+        stats.series_terms += 1;
+        charge(&mut stats.series_s, t);
+        let ub = solve(&rhs, stats, "order-p")?;
+        let lp = -metric.dot_u(&ub, &us[1]) / denom;
+        us.push(ub.iter().zip(&ut).map(|(b, t)| b + lp * t).collect());
+        ls.push(lp);
+    }
+    // Step length (eq. L): ratio rule on the scaled terms T̃_p = (Ũ_p, λ̃_p).
+    let terms = metric.stack(&us, &ls);
+    let n1 = norm(&terms[1]);
+    let nn = norm(&terms[n_ord]);
+    if !(n1.is_finite() && nn.is_finite()) {
+        return Err(Error::NonFinite {
+            step: index,
+            param: "lambda",
+            at: lambda0,
+            what: format!("series terms (|U_1| = {n1:e}, |U_{n_ord}| = {nn:e}, scaled)"),
+        });
+    }
+    let cap = 1e15f64.powf(1.0 / n_ord as f64);
+    let a_poly = if nn > 0.0 {
+        (cfg.eps * n1 / nn)
+            .powf(1.0 / (n_ord as f64 - 1.0))
+            .min(cap)
+    } else {
+        cap
+    };
+    let geometric = geometric::detect(&terms);
+    let mut step = PathStep {
+        index,
+        u: us,
+        lambda: ls,
+        length: a_poly,
+        a_poly,
+        pade: None,
+        geometric,
+        end_residual: 0.0,
+        u_end: vec![],
+        lambda_end: 0.0,
+    };
+    // Padé on the scaled terms: its denominators are those of the scaled
+    // series, and the approximant is linear in the terms, so that
+    // `PathStep::eval` applies it to the terms in the problem's units.
+    if cfg.pade
+        && let Some(a) = pade::range(&terms, n_ord, cfg.eps, a_poly, cap.min(10.0 * a_poly))
+        && a > a_poly
+    {
+        step.pade = pade::Pade::new(&terms, n_ord);
+        step.length = a;
+    }
+    drop(terms);
+    if step.length < cfg.min_step {
+        return Err(Error::StepCollapse {
+            step: index,
+            param: "lambda",
+            at: lambda0,
+            length: step.length,
+        });
+    }
+    // Do not overshoot the target load.
+    let (_, l_end) = step.eval(step.length);
+    if (l_end - cfg.lambda_end) * forward > 0.0
+        && let Some(a) = step.a_at_lambda(cfg.lambda_end)
+    {
+        step.length = a;
+    }
+    // Step end: accept when the residual is small; correct when it is
+    // moderately large; otherwise (or when the correction fails) the step
+    // length overestimated the series' validity (e.g. a contact node closing
+    // within the step): halve it. Halving costs residual evaluations only;
+    // correcting from far off the path can converge onto another branch.
+    let scale = norm(&r_lambda).max(f64::MIN_POSITIVE);
+    let snap = 1e-9 * cfg.lambda_scale;
+    let mut first = true;
+    loop {
+        let (u_end, mut l_end) = step.eval(step.length);
+        if (l_end - cfg.lambda_end) * forward > 0.0 && (l_end - cfg.lambda_end).abs() < snap {
+            l_end = cfg.lambda_end;
+        }
+        // Arclength-constrained correction <dŨ, Ũ_1> + dλ̃ λ̃_1 = 0: modified
+        // Newton with the step's factorization while it contracts by 10x per
+        // iteration, else refactorized at the iterate. A start residual above
+        // CORRECTABLE is not corrected.
+        let settings = Settings {
+            tol: cfg.residual_tol,
+            max_iter: if cfg.correct { cfg.max_corrections } else { 0 },
+            jacobian: Jacobian::Reuse {
+                initial: Some((&fact, &ut)),
+                contraction: 0.1,
+                scale,
+            },
+            max_residual: CORRECTABLE,
+            step: index,
+        };
+        let constraint = Constraint::Arclength {
+            t_u: &step.u[1],
+            t_lambda: step.lambda[1],
+            reference: None,
+        };
+        let attempt = correct::correct(
+            problem,
+            u_end,
+            l_end,
+            &constraint,
+            &settings,
+            metric,
+            lu,
+            stats,
+        );
+        if first {
+            step.end_residual = attempt.as_ref().map_or(f64::INFINITY, |e| e.start_residual);
+            first = false;
+        }
+        match attempt {
+            Ok(end) if end.u.iter().all(|x| x.is_finite()) && end.lambda.is_finite() => {
+                step.u_end = end.u;
+                step.lambda_end = end.lambda;
+                return Ok(step);
+            }
+            Ok(_) => {}
+            Err(e) if e.is_numerical() => {
+                if step.length * 0.5 < cfg.min_step || !cfg.correct {
+                    return Err(e);
+                }
+            }
+            Err(e) => return Err(e),
+        }
+        // Padé first falls back to the polynomial, then the length halves.
+        if step.pade.is_some() {
+            step.pade = None;
+            step.length = step.length.min(step.a_poly);
+        } else {
+            step.length *= 0.5;
+        }
+        stats.step_cuts += 1;
+        if step.length < cfg.min_step {
+            return Err(Error::StepCollapse {
+                step: index,
+                param: "lambda",
+                at: lambda0,
+                length: step.length,
+            });
+        }
+    }
+}
+
+/// Relative residual |R| / |R_lambda| above which a step end is not corrected
+/// but the step shortened: a point this far off the path is outside the
+/// series' validity, and Newton from it may land on another branch.
+const CORRECTABLE: f64 = 1.0;
+
+/// serde helpers: f64 values as their IEEE-754 bit patterns (exact round trip).
+mod bits {
+    pub mod scalar {
+        use serde::{Deserialize, Deserializer, Serializer};
+        pub fn serialize<S: Serializer>(x: &f64, s: S) -> Result<S::Ok, S::Error> {
+            s.serialize_u64(x.to_bits())
+        }
+        pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+            Ok(f64::from_bits(u64::deserialize(d)?))
+        }
+    }
+    pub mod vec {
+        use serde::{Deserialize, Deserializer, Serialize, Serializer};
+        pub fn serialize<S: Serializer>(x: &[f64], s: S) -> Result<S::Ok, S::Error> {
+            x.iter()
+                .map(|v| v.to_bits())
+                .collect::<Vec<u64>>()
+                .serialize(s)
+        }
+        pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<f64>, D::Error> {
+            Ok(Vec::<u64>::deserialize(d)?
+                .into_iter()
+                .map(f64::from_bits)
+                .collect())
+        }
+    }
+    pub mod dir {
+        use serde::{Deserialize, Deserializer, Serialize, Serializer};
+        #[allow(clippy::type_complexity)]
+        pub fn serialize<S: Serializer>(
+            x: &Option<(Vec<f64>, f64)>,
+            s: S,
+        ) -> Result<S::Ok, S::Error> {
+            x.as_ref()
+                .map(|(u, l)| {
+                    (
+                        u.iter().map(|v| v.to_bits()).collect::<Vec<u64>>(),
+                        l.to_bits(),
+                    )
+                })
+                .serialize(s)
+        }
+        #[allow(clippy::type_complexity)]
+        pub fn deserialize<'de, D: Deserializer<'de>>(
+            d: D,
+        ) -> Result<Option<(Vec<f64>, f64)>, D::Error> {
+            Ok(Option::<(Vec<u64>, u64)>::deserialize(d)?.map(|(u, l)| {
+                (
+                    u.into_iter().map(f64::from_bits).collect(),
+                    f64::from_bits(l),
+                )
+            }))
+        }
+    }
+}
