@@ -19,6 +19,7 @@ use crate::output::{Stop, write_csv, write_json};
 use crate::scene::shell::{Method, ShellScene, load};
 use crate::series::path::{Checkpoint, Path as AnmPath};
 use crate::series::stop::Stop as PathStop;
+use crate::series::correct::Metric;
 use crate::series::{ContinuationProblem, Stats, correct};
 use crate::shell::ShellModel;
 use serde::{Deserialize, Serialize};
@@ -252,16 +253,12 @@ fn run_inner(
         rec.vtk(&model, &full0, 0.0, "shell_0000.vtu")?;
     }
     let mut grid_lu = SparseLu::new();
-    // Grid points are held to |R| / |F| <= residual_tol; with prescribed
-    // displacements only (no load), |F| is the norm of the lambda column.
+    // Grid points are held to |R| / |R_lambda(0)| <= residual_tol in the
+    // engine's unit-free residual norm (Metric::residual_norm).
+    let metric = Metric::for_problem(&model, cfg.lambda_scale)?;
     let f_norm = {
-        let f = super::build::load_norm(&model);
-        if f > 0.0 {
-            f
-        } else {
-            let (_, rl) = model.tangent(&zero, 0.0)?;
-            crate::linalg::norm(&rl).max(f64::MIN_POSITIVE)
-        }
+        let (_, rl) = model.tangent(&zero, 0.0)?;
+        metric.residual_norm(&rl).max(f64::MIN_POSITIVE)
     };
     let mut grid_stats = Stats::default();
     let far_skipped = model.search_distance.is_finite() && !model.pairs.is_empty();
@@ -309,6 +306,7 @@ fn run_inner(
                         g,
                         cfg.residual_tol,
                         f_norm,
+                        &metric,
                         cfg.max_corrections,
                         &mut grid_lu,
                         &mut grid_stats,

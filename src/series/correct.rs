@@ -153,6 +153,22 @@ impl Metric {
         }
     }
 
+    /// Norm of a residual (or of dR/dlambda): sqrt(sum (R_i s_i)^2). R_i is
+    /// conjugate to u_i (R_i u_i is a work), so R_i s_i has one unit for
+    /// every unknown (a force on a displacement, a moment on a director) and
+    /// the relative residual |R| / |R_lambda| does not depend on units.
+    pub fn residual_norm(&self, r: &[f64]) -> f64 {
+        match &self.inv_u {
+            None => norm(r),
+            Some(w) => r
+                .iter()
+                .zip(w)
+                .map(|(x, w)| (x / w) * (x / w))
+                .sum::<f64>()
+                .sqrt(),
+        }
+    }
+
     /// The weight of the load parameter in the inner product, 1/Lambda^2.
     pub fn lambda_weight(&self) -> f64 {
         self.inv_l * self.inv_l
@@ -289,10 +305,10 @@ pub fn correct<P: ContinuationProblem + ?Sized>(
         stats.residual_evaluations += 1;
         charge(&mut stats.assembly_s, t);
         let scale = match &assembled {
-            Some((_, rl)) => norm(rl).max(f64::MIN_POSITIVE),
+            Some((_, rl)) => metric.residual_norm(rl).max(f64::MIN_POSITIVE),
             None => fixed_scale,
         };
-        let res = norm(&r) / scale;
+        let res = metric.residual_norm(&r) / scale;
         if it == 0 {
             start_residual = res;
         }
@@ -391,7 +407,8 @@ pub fn correct<P: ContinuationProblem + ?Sized>(
 /// U, lambda held, from `u`. Residual first (a point already within `tol`
 /// costs one residual evaluation), then full Newton (a fresh tangent and
 /// factorization per iteration, assembled after the residual at the iterate).
-/// The residual is measured as |R| / `scale` (e.g. |F| or |R_lambda|).
+/// The residual is measured as |R| / `scale` in the norm of `metric`
+/// ([`Metric::residual_norm`]; `scale` e.g. |F| or |R_lambda| in that norm).
 /// Returns the corrected U and the iterations used (0: already on the path).
 #[allow(clippy::too_many_arguments)]
 pub fn correct_at_lambda<P: ContinuationProblem + ?Sized>(
@@ -400,6 +417,7 @@ pub fn correct_at_lambda<P: ContinuationProblem + ?Sized>(
     lambda: f64,
     tol: f64,
     scale: f64,
+    metric: &Metric,
     max_iter: usize,
     lu: &mut SparseLu,
     stats: &mut Stats,
@@ -422,7 +440,7 @@ pub fn correct_at_lambda<P: ContinuationProblem + ?Sized>(
         lambda,
         &Constraint::FixedLambda,
         &settings,
-        &Metric::unit(),
+        metric,
         lu,
         stats,
     )?;

@@ -369,7 +369,7 @@ pub(crate) fn series_step<P: ContinuationProblem + ?Sized>(
     // length overestimated the series' validity (e.g. a contact node closing
     // within the step): halve it. Halving costs residual evaluations only;
     // correcting from far off the path can converge onto another branch.
-    let scale = norm(&r_lambda).max(f64::MIN_POSITIVE);
+    let scale = metric.residual_norm(&r_lambda).max(f64::MIN_POSITIVE);
     let snap = 1e-9 * cfg.lambda_scale;
     let mut first = true;
     loop {
