@@ -124,10 +124,14 @@ fn mutated_scenes_give_errors_or_finite_results_never_panics() {
         }
         let p = dir.join(format!("case{case}.toml"));
         std::fs::write(&p, toml::to_string(&doc).unwrap()).unwrap();
+        let t0 = std::time::Instant::now();
         let result = catch_unwind(AssertUnwindSafe(|| {
             let s = anm::scene::shell::load(&p)?;
             anm::run::run_loaded(&s, None, false)
         }));
+        if t0.elapsed().as_secs_f64() > 2.0 {
+            println!("case {case}: {what}: {:.1} s", t0.elapsed().as_secs_f64());
+        }
         match result {
             Err(_) => panic!("case {case}: {what}: panic"),
             Ok(Err(e)) => {
