@@ -126,3 +126,30 @@ fn propped_cantilever_scene() {
     // to the residual the run is held to (1e-6 |F| per step end).
     assert_rel(r.end["reaction_z"] + r.end["R"], 1.0, 1e-5, "clamp + plane reactions");
 }
+
+/// The ring's radial stretch l at lambda = 1 from the closed forms (scene
+/// header): follower l^2 = 1 + 2 c, dead l (l^2 - 1) = 2 c, c = p R / (E t).
+fn ring_stretch(follower: bool, c: f64) -> f64 {
+    if follower {
+        return (1.0 + 2.0 * c).sqrt();
+    }
+    let mut l: f64 = 1.0 + c;
+    for _ in 0..50 {
+        l -= (l * (l * l - 1.0) - 2.0 * c) / (3.0 * l * l - 1.0);
+    }
+    l
+}
+
+#[test]
+fn ring_under_follower_and_dead_pressure_matches_the_membrane_closed_form() {
+    for (name, follower) in [("ring-pressure-follower", true), ("ring-pressure-dead", false)] {
+        let r = run(name);
+        for k in 1..=10 {
+            let lambda = 0.1 * k as f64;
+            let want = ring_stretch(follower, 0.2 * lambda) - 1.0;
+            let got = r.value_at("u_r", lambda).unwrap();
+            assert_rel(got, want, 2e-3, &format!("{name}: u_r/R at lambda = {lambda:.1}"));
+        }
+        println!("{name}: {} steps", r.steps);
+    }
+}
