@@ -35,7 +35,7 @@
 //! |G| seen is reported as the constraint drift.
 //!
 //! Checked on the plane limit: with r large and Omega r = -V, the roller
-//! solution matches the plane's (tests/reference_ida.rs).
+//! solution matches the plane's (tests/reference/ida.rs).
 
 use super::dae::{Dae, Dense, FrictionDae};
 use super::laws::{Contact, Friction};

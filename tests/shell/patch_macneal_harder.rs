@@ -18,8 +18,7 @@
 //! thickness stretch: director increment w = (0, 0, -nu/(1-nu) (e_xx + e_yy)).
 //! Bending: v_z = 1e-3 (x² + xy + y²)/2, director w = (-v_z,x, -v_z,y, 0).
 
-#[path = "common/shell.rs"]
-mod shell_common;
+use crate::shell_common;
 
 use anm::mesh::{Mesh, Vec3};
 use std::collections::BTreeMap;

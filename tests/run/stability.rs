@@ -7,7 +7,7 @@
 //! `anm::study::shell_check`) or stops with a diagnosis; zero NaN or inf in
 //! any output, zero panics.
 
-mod common;
+use crate::common;
 use anm::study::stress::{Verdict, markdown, stress, stress_shell};
 use common::friction_scene;
 

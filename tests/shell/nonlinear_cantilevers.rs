@@ -17,8 +17,7 @@
 //!         E = 1e7, nu = 0, EI = E b t^3 / 12, 40 x 1 elements
 //! ```
 
-#[path = "common/shell.rs"]
-mod shell_common;
+use crate::shell_common;
 
 use anm::mesh::{Vec3, structured};
 use anm::series::continuation::{ContinuationConfig, PathStep, run};

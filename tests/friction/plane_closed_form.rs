@@ -13,7 +13,7 @@
 //! zeta = 0.02 N, eta = 1e-6 N, K = 1e8 N/m; t in [0, 3]. The deviations they
 //! cause after t = 1.2 s: zeta^2 / (2 R_N^2) <= 0.5%, omega^2 / (2 v_s^2) <= 0.2%.
 
-mod common;
+use crate::common;
 use anm::model::friction_run::run;
 use common::{assert_close, column, friction_scene};
 

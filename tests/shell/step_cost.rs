@@ -3,7 +3,7 @@
 //! target: step <= 1.5 x (one factorization + N solves).
 //!
 //! Ignored (a measurement, not a check; about a minute):
-//! `cargo test --release --test shell_step_cost -- --ignored --nocapture`.
+//! `cargo test --release --test shell step_cost -- --ignored --nocapture`.
 //! The path is followed to lambda = 0.3 (contact active), then the step from
 //! there is repeated and each part timed; the minimum over the repetitions is
 //! printed, the least disturbed by other work on a shared machine. "parts"

@@ -18,7 +18,6 @@
 //! vertical equilibrium: P(w) = EA (w^2 - 2 H w)(w - H) / L0^3.
 //! Limit points at w = H (1 -+ 1/sqrt(3)), lambda = ±2 H^3 EA / (3 sqrt(3) L0^3 P_ref).
 
-mod common;
 use anm::series::TapeProblem;
 use anm::series::continuation::{ContinuationConfig, run};
 

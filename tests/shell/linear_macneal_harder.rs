@@ -15,8 +15,7 @@
 //!   E = 4.32e8, nu = 0          at (0,0,R) toward the axis    E = 6.825e7, nu = 0.3
 //! ```
 
-#[path = "common/shell.rs"]
-mod shell_common;
+use crate::shell_common;
 
 use anm::mesh::{Vec3, structured};
 use shell_common::*;

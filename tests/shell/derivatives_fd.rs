@@ -7,8 +7,7 @@
 //! follower end couple and a rigid cylinder near the free end carrying the
 //! contact law of eq. (3) (K = 1e4, eta = 1e-2, delta = initial gaps).
 
-#[path = "common/shell.rs"]
-mod shell_common;
+use crate::shell_common;
 
 use anm::contact::Obstacle;
 use anm::linalg::norm;

@@ -15,7 +15,7 @@
 //!          '-----'
 //! ```
 
-mod common;
+use crate::common;
 use anm::model::friction_run::run;
 use anm::series::taylor;
 use common::{column, friction_scene};

@@ -13,7 +13,7 @@
 //! Plateau (v = 0): k u = f R_N |V|_reg^(q-1) V / Vc^q = 0.2 (1 + omega^2)^((q-1)/2).
 //! Exact omega = 0 curve: du/dt = V - Vc (k u / (f R_N))^(1/q).
 
-mod common;
+use crate::common;
 use anm::model::friction_run::run;
 use common::{assert_close, column, friction_scene};
 

@@ -17,8 +17,7 @@
 //!   E = 2e9, nu = 0, 40 x 1 elements, K = 1e9 N/m, eta = 1e-6 N per node
 //! ```
 
-#[path = "common/shell.rs"]
-mod shell_common;
+use crate::shell_common;
 
 use anm::contact::Obstacle;
 use anm::mesh::{Vec3, structured};

@@ -18,7 +18,7 @@
 
 #![cfg(feature = "reference")]
 
-mod common;
+use crate::common;
 use anm::run::{RunReport, Snapshot, run_loaded};
 use std::path::Path;
 use std::sync::OnceLock;

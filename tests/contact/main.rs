@@ -1,0 +1,8 @@
+//! Shell contact with rigid obstacles (eq. 3).
+//! One test binary per area (DESIGN §1): the files below are its modules.
+
+#[path = "../common/shell.rs"]
+mod shell_common;
+
+mod plate_cylinder;
+mod propped_cantilever;

@@ -1,0 +1,5 @@
+//! The ANM path engine: closed forms, units, checkpoints.
+//! One test binary per area (DESIGN §1): the files below are its modules.
+
+mod units;
+mod von_mises_truss;

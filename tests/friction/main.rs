@@ -1,0 +1,9 @@
+//! The point-mass friction cases against closed forms (paper §3).
+//! One test binary per area (DESIGN §1): the files below are its modules.
+
+#[path = "../common/mod.rs"]
+mod common;
+
+mod friction_1d_closed_form;
+mod plane_closed_form;
+mod roller_breakdown;

@@ -1,0 +1,9 @@
+//! The run driver: units, interruption and resume, stability stress.
+//! One test binary per area (DESIGN §1): the files below are its modules.
+
+#[path = "../common/mod.rs"]
+mod common;
+
+mod interrupt_resume;
+mod units;
+mod stability;

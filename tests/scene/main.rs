@@ -1,0 +1,7 @@
+//! Scene files: bad input, the key reference, mutated scenes.
+//! One test binary per area (DESIGN §1): the files below are its modules.
+
+mod bad_input;
+mod docs;
+mod fuzz;
+mod shell_bad_input;

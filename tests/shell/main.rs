@@ -1,0 +1,12 @@
+//! Shell element and verification cases (closed forms, published tables).
+//! One test binary per area (DESIGN §1): the files below are its modules.
+
+#[path = "../common/shell.rs"]
+mod shell_common;
+
+mod derivatives_fd;
+mod linear_macneal_harder;
+mod nonlinear_cantilevers;
+mod patch_macneal_harder;
+mod step_cost;
+mod verification_scenes;
