@@ -702,7 +702,7 @@ pub fn run_loaded(scene: &ShellScene, out_dir: Option<&Path>, progress: bool) ->
                 &[
                     Panel {
                         title: "plate-cylinder: deflection at A",
-                        x_label: "lambda",
+                        x_label: "lambda (-)",
                         y_label: "uz_A (m)",
                         curves: vec![Curve {
                             label: "uz_A",
@@ -712,7 +712,7 @@ pub fn run_loaded(scene: &ShellScene, out_dir: Option<&Path>, progress: bool) ->
                     },
                     Panel {
                         title: "plate-cylinder: normal contact forces",
-                        x_label: "lambda",
+                        x_label: "lambda (-)",
                         y_label: "R (N)",
                         curves: vec![
                             Curve {

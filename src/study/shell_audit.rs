@@ -352,7 +352,7 @@ pub fn write(scene: &ShellScene, rows: &[ShellAuditRow], dir: &Path) -> Result<(
         panels.push(Panel {
             title: dev_title,
             x_label: unit,
-            y_label: "relative deviation",
+            y_label: "deviation (relative)",
             curves: vec![
                 curve("uz_A(1)", &|r| r.uz_a_deviation),
                 curve("rn_total(1)", &|r| r.rn_total_deviation),
@@ -365,7 +365,7 @@ pub fn write(scene: &ShellScene, rows: &[ShellAuditRow], dir: &Path) -> Result<(
         panels.push(Panel {
             title: cost_title,
             x_label: unit,
-            y_label: "count",
+            y_label: "count (-)",
             curves: vec![
                 curve("steps", &|r| r.steps as f64),
                 curve("factorizations", &|r| r.factorizations as f64),
