@@ -38,7 +38,8 @@ enum Command {
     /// Read and validate a scene without solving it.
     Check { scene: PathBuf },
     /// Sweep regularization parameters (in parallel) and report how much they
-    /// bend the key outputs and what they cost: audit.csv, audit.md, audit.svg.
+    /// bend the key outputs and what they cost: the table on stdout; with -o,
+    /// also audit.csv, audit.md, audit.svg.
     Audit {
         scene: PathBuf,
         /// Values of omega (velocity regularization, eq. 6), comma-separated.
@@ -53,11 +54,13 @@ enum Command {
         /// Values of the penalty stiffness K (eq. 3, N/m).
         #[arg(long, value_delimiter = ',')]
         penalty: Vec<f64>,
+        /// Write audit.csv, audit.md and audit.svg into DIR (otherwise no files).
         #[arg(short, long, value_name = "DIR")]
-        out: PathBuf,
+        out: Option<PathBuf>,
     },
     /// Work-precision benchmark: error against wall time per method and
-    /// setting (bench.csv, bench.md, bench.svg). Wall times are medians.
+    /// setting, tables on stdout; with -o, also bench.csv, bench.md, bench.svg
+    /// and target.md. Wall times are medians.
     Bench {
         /// Folder holding the canonical scenes.
         #[arg(long, default_value = "scenes")]
@@ -88,8 +91,10 @@ enum Command {
         /// valgrind's callgrind (a few seconds each).
         #[arg(long)]
         instructions: bool,
+        /// Write the tables and plots into DIR (otherwise no files; --scaling
+        /// needs it for its meshes, scenes and runs).
         #[arg(short, long, value_name = "DIR")]
-        out: PathBuf,
+        out: Option<PathBuf>,
     },
     /// Time one method and setting on a friction scene: `repeat` solves after
     /// a warm-up, wall min / median / max. Under callgrind (see
@@ -240,9 +245,13 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
                     );
                 }
                 let rows = anm::study::shell_audit::audit(&sc, &sweeps)?;
-                anm::study::shell_audit::write(&sc, &rows, &out)?;
+                if let Some(out) = &out {
+                    anm::study::shell_audit::write(&sc, &rows, out)?;
+                }
                 print!("{}", anm::study::shell_audit::markdown(&sc, &rows));
-                println!("\noutputs in {}", out.display());
+                if let Some(out) = &out {
+                    println!("\noutputs in {}", out.display());
+                }
                 return Ok(ExitCode::SUCCESS);
             };
             if sweeps.omega.is_empty()
@@ -255,9 +264,13 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
                 );
             }
             let rows = anm::study::audit::audit(&sc, &sweeps)?;
-            anm::study::audit::write(&sc, &rows, &out)?;
+            if let Some(out) = &out {
+                anm::study::audit::write(&sc, &rows, out)?;
+            }
             print!("{}", anm::study::audit::markdown(&sc, &rows));
-            println!("\noutputs in {}", out.display());
+            if let Some(out) = &out {
+                println!("\noutputs in {}", out.display());
+            }
             Ok(ExitCode::SUCCESS)
         }
         Command::Bench {
@@ -273,13 +286,22 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
         } => {
             use anm::study::{bench, target as head};
             if !scaling.is_empty() {
+                let Some(out) = &out else {
+                    anyhow::bail!(
+                        "--scaling writes its meshes, scenes and runs into a folder: give -o DIR"
+                    );
+                };
                 return bench_scaling(
                     &scenes.join("plate-cylinder.toml"),
                     &scaling,
                     scaling_steps,
-                    &out,
+                    out,
                 );
             }
+            // The plate-cylinder skip study times runs that write their
+            // outputs: without -o they go to a scratch folder, removed after.
+            let scratch = bench::Scratch::new();
+            let skip_dir = out.clone().unwrap_or_else(|| scratch.path().to_path_buf());
             let with_ida = cfg!(feature = "reference");
             let exe = if instructions {
                 Some(std::env::current_exe()?)
@@ -294,7 +316,7 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
                 let path = scenes.join(format!("{case}.toml"));
                 let (_, sc) = load(&path)?;
                 let Some(sc) = sc else {
-                    let (r, notes) = bench_shell(case, &path, repeat, &out)?;
+                    let (r, notes) = bench_shell(case, &path, repeat, &skip_dir)?;
                     shell_notes += &notes;
                     rows.extend(r);
                     continue;
@@ -327,15 +349,19 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
                 heads.push(h);
                 rows.extend(r);
             }
-            bench::write(&rows, &reference_name, &out)?;
-            if !shell_notes.is_empty() {
-                let file = out.join("bench-shell.md");
-                std::fs::write(&file, &shell_notes)
-                    .with_context(|| format!("writing {}", file.display()))?;
+            if let Some(out) = &out {
+                bench::write(&rows, &reference_name, out)?;
+                if !shell_notes.is_empty() {
+                    let file = out.join("bench-shell.md");
+                    std::fs::write(&file, &shell_notes)
+                        .with_context(|| format!("writing {}", file.display()))?;
+                }
+                head::write(&heads, out)?;
             }
-            head::write(&heads, &out)?;
             print!("\n{}", head::markdown(&heads));
-            println!("outputs in {}", out.display());
+            if let Some(out) = &out {
+                println!("outputs in {}", out.display());
+            }
             Ok(ExitCode::SUCCESS)
         }
         Command::Time {

@@ -301,7 +301,34 @@ pub fn markdown(scene: &FrictionScene, rows: &[AuditRow]) -> String {
     s
 }
 
-/// Writes audit.csv, audit.md and audit.svg into `dir`.
+/// The unit of a swept parameter.
+fn unit(parameter: &str) -> &'static str {
+    match parameter {
+        "omega" => "-",
+        "zeta" | "eta" => "N",
+        "penalty" => "N/m",
+        _ => "?",
+    }
+}
+
+/// The x label of the audit plot: "omega (-)" for one swept parameter,
+/// "parameter value (omega: -, eta: N)" for several.
+fn parameter_axis(params: &[&str]) -> String {
+    match params {
+        [p] => format!("{} ({})", if *p == "penalty" { "K" } else { p }, unit(p)),
+        _ => format!(
+            "parameter value ({})",
+            params
+                .iter()
+                .map(|p| format!("{}: {}", if *p == "penalty" { "K" } else { p }, unit(p)))
+                .collect::<Vec<_>>()
+                .join(", ")
+        ),
+    }
+}
+
+/// Writes audit.csv, audit.md and audit.svg into `dir` (`anm audit -o DIR`;
+/// without it the table only goes to stdout).
 pub fn write(scene: &FrictionScene, rows: &[AuditRow], dir: &Path) -> Result<()> {
     create_dir(dir)?;
     let io = |e: std::io::Error| Error::Io {
@@ -351,27 +378,28 @@ pub fn write(scene: &FrictionScene, rows: &[AuditRow], dir: &Path) -> Result<()>
         "{}: deviation of the key output from the unregularized reference",
         scene.kind.name()
     );
+    let x_label = parameter_axis(&params);
     draw(
         &dir.join("audit.svg"),
         &[
             Panel {
                 title: &title,
-                x_label: "parameter value",
-                y_label: "relative deviation",
+                x_label: &x_label,
+                y_label: "deviation (relative)",
                 curves: curves(&|r| r.key_deviation),
                 log: (true, true),
             },
             Panel {
                 title: "deviation of the displacement trajectory",
-                x_label: "parameter value",
-                y_label: "max |u - u_ref| / max |u_ref|",
+                x_label: &x_label,
+                y_label: "max |u - u_ref| / max |u_ref| (-)",
                 curves: curves(&|r| r.trajectory_deviation),
                 log: (true, true),
             },
             Panel {
                 title: "cost",
-                x_label: "parameter value",
-                y_label: "steps",
+                x_label: &x_label,
+                y_label: "steps (-)",
                 curves: curves(&|r| r.steps as f64),
                 log: (true, true),
             },

@@ -16,7 +16,7 @@ use crate::output::create_dir;
 use crate::output::plot::{Curve, Panel, draw};
 use crate::scene::friction::FrictionScene;
 use crate::series::Stats;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// A method and its accuracy setting.
 #[derive(Clone, Debug, PartialEq)]
@@ -292,7 +292,8 @@ pub fn markdown(rows: &[BenchRow], reference_name: &str) -> String {
     s
 }
 
-/// Writes bench.csv, bench.md and bench.svg (error against wall time).
+/// Writes bench.csv, bench.md and bench.svg (error against wall time) into
+/// `dir` (`anm bench -o DIR`; without it the tables only go to stdout).
 pub fn write(rows: &[BenchRow], reference_name: &str, dir: &Path) -> Result<()> {
     create_dir(dir)?;
     let mut w = csv::Writer::from_path(dir.join("bench.csv"))
@@ -337,7 +338,7 @@ pub fn write(rows: &[BenchRow], reference_name: &str, dir: &Path) -> Result<()> 
             Panel {
                 title,
                 x_label: "wall time (s)",
-                y_label: "max relative error",
+                y_label: "max error (relative)",
                 curves: methods
                     .iter()
                     .map(|m| Curve {
@@ -355,6 +356,38 @@ pub fn write(rows: &[BenchRow], reference_name: &str, dir: &Path) -> Result<()> 
         .collect();
     draw(&dir.join("bench.svg"), &panels)?;
     Ok(())
+}
+
+/// A scratch folder for runs whose files are a by-product of what is measured
+/// (the plate-cylinder skip study without `-o`): a fresh path under the
+/// system's temporary folder, not created here, removed with everything in
+/// it when dropped.
+pub struct Scratch(PathBuf);
+
+impl Scratch {
+    pub fn new() -> Self {
+        let nanos = std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map_or(0, |d| d.subsec_nanos());
+        Scratch(std::env::temp_dir().join(format!("anm-bench-{}-{nanos}", std::process::id())))
+    }
+    pub fn path(&self) -> &Path {
+        &self.0
+    }
+}
+
+impl Default for Scratch {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl Drop for Scratch {
+    fn drop(&mut self) {
+        if self.0.exists() {
+            let _ = std::fs::remove_dir_all(&self.0);
+        }
+    }
 }
 
 /// The friction work-precision matrix of issue 5: ANM orders 5..30 x eps

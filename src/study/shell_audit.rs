@@ -399,7 +399,7 @@ pub fn write(scene: &ShellScene, rows: &[ShellAuditRow], dir: &Path) -> Result<(
         panels.push(Panel {
             title: dev_title,
             x_label: unit,
-            y_label: "relative deviation",
+            y_label: "deviation (relative)",
             curves: vec![
                 curve(0, &|r| r.key_deviation),
                 curve(1, &|r| r.contact_deviation),
@@ -410,7 +410,7 @@ pub fn write(scene: &ShellScene, rows: &[ShellAuditRow], dir: &Path) -> Result<(
         panels.push(Panel {
             title: cost_title,
             x_label: unit,
-            y_label: "count",
+            y_label: "count (-)",
             curves: vec![
                 curve(3, &|r| r.steps as f64),
                 curve(4, &|r| r.factorizations as f64),
