@@ -60,8 +60,28 @@ pub enum Error {
         at: f64,
         length: f64,
     },
-    #[error("{0}")]
-    Output(String),
+    /// An output file could not be written (or would hold a non-finite value).
+    #[error("{file}: cannot write: {problem}")]
+    Write { file: PathBuf, problem: String },
+    /// A run of a study (audit, bench, stress, scaling) failed.
+    #[error("{study}: {case}: {problem}")]
+    Study {
+        study: &'static str,
+        case: String,
+        problem: String,
+    },
+    /// A value asked of an accepted step lies on neither its series nor its
+    /// correction.
+    #[error("step {step}, {param} = {at:.9e}: {what}")]
+    OffPath {
+        step: usize,
+        param: &'static str,
+        at: f64,
+        what: String,
+    },
+    /// An output folder cannot be resumed from.
+    #[error("{file}: cannot resume: {problem}")]
+    Resume { file: PathBuf, problem: String },
     #[error("lambda = {lambda:.9e}: interrupted (Ctrl-C or SIGTERM)")]
     Interrupted { lambda: f64 },
     #[error(
@@ -78,6 +98,23 @@ pub enum Error {
 }
 
 impl Error {
+    /// A failed write of `file`.
+    pub fn write(file: impl Into<PathBuf>, problem: impl ToString) -> Self {
+        Error::Write {
+            file: file.into(),
+            problem: problem.to_string(),
+        }
+    }
+
+    /// A failed run of a study.
+    pub fn study(study: &'static str, case: impl Into<String>, problem: impl ToString) -> Self {
+        Error::Study {
+            study,
+            case: case.into(),
+            problem: problem.to_string(),
+        }
+    }
+
     /// Short machine-readable kind, used as `stop.reason` in summary.json.
     pub fn kind(&self) -> &'static str {
         match self {
@@ -90,7 +127,10 @@ impl Error {
             Error::NoConvergence { .. } => "no_convergence",
             Error::NonFinite { .. } => "non_finite",
             Error::StepCollapse { .. } => "step_collapse",
-            Error::Output(_) => "output",
+            Error::Write { .. } => "write",
+            Error::Study { .. } => "study",
+            Error::OffPath { .. } => "off_path",
+            Error::Resume { .. } => "resume",
             Error::ContactMissed { .. } => "contact_missed",
             Error::Interrupted { .. } => "interrupted",
         }

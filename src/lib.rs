@@ -24,9 +24,9 @@ pub mod linalg;
 pub mod mesh;
 pub mod model;
 pub mod output;
-pub mod run;
 #[cfg(feature = "reference")]
 pub mod reference;
+pub mod run;
 pub mod scene;
 pub mod series;
 pub mod shell;

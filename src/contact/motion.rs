@@ -17,9 +17,13 @@ use super::obstacle::{Obstacle, Vec3};
 pub enum Motion {
     Fixed,
     /// Displacement per unit of the path parameter (m per unit lambda, or m/s).
-    Translate { velocity: Vec3 },
+    Translate {
+        velocity: Vec3,
+    },
     /// Angular velocity about the obstacle's axis (rad per unit lambda, or rad/s).
-    Rotate { omega: f64 },
+    Rotate {
+        omega: f64,
+    },
 }
 
 impl Motion {

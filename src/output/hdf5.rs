@@ -21,7 +21,7 @@ pub struct FieldWriter {
 }
 
 fn err(path: &Path, e: impl std::fmt::Display) -> Error {
-    Error::Output(format!("{}: HDF5: {e}", path.display()))
+    Error::write(path, format!("HDF5: {e}"))
 }
 
 impl FieldWriter {

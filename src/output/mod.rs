@@ -11,29 +11,29 @@ use std::path::Path;
 
 /// Writes a CSV file with a header row; values in full precision.
 pub fn write_csv(path: &Path, header: &[&str], rows: &[Vec<f64>]) -> Result<()> {
-    let err = |e: csv::Error| Error::Output(format!("{}: {e}", path.display()));
+    let err = |e: csv::Error| Error::write(path, e);
     let mut w = csv::Writer::from_path(path).map_err(err)?;
     w.write_record(header).map_err(err)?;
     for row in rows {
         if let Some(bad) = row.iter().position(|x| !x.is_finite()) {
-            return Err(Error::Output(format!(
-                "{}: refusing to write non-finite `{}` = {}",
-                path.display(),
-                header.get(bad).unwrap_or(&"?"),
-                row[bad]
-            )));
+            return Err(Error::write(
+                path,
+                format!(
+                    "refusing to write non-finite `{}` = {}",
+                    header.get(bad).unwrap_or(&"?"),
+                    row[bad]
+                ),
+            ));
         }
         w.write_record(row.iter().map(|x| format!("{x:.17e}")))
             .map_err(err)?;
     }
-    w.flush()
-        .map_err(|e| Error::Output(format!("{}: {e}", path.display())))
+    w.flush().map_err(|e| Error::write(path, e))
 }
 
 /// Writes any serializable value as pretty JSON.
 pub fn write_json<T: Serialize>(path: &Path, value: &T) -> Result<()> {
-    let text = serde_json::to_string_pretty(value)
-        .map_err(|e| Error::Output(format!("{}: {e}", path.display())))?;
+    let text = serde_json::to_string_pretty(value).map_err(|e| Error::write(path, e))?;
     std::fs::write(path, text + "\n").map_err(|e| Error::Io {
         file: path.to_path_buf(),
         source: e,

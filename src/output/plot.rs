@@ -193,7 +193,7 @@ fn bounds(values: impl Iterator<Item = f64>, log: bool) -> (f64, f64) {
 
 /// Draws the panels stacked vertically into one SVG file.
 pub fn draw(path: &Path, panels: &[Panel]) -> Result<()> {
-    let err = |e: String| Error::Output(format!("{}: plot: {e}", path.display()));
+    let err = |e: String| Error::write(path, format!("plot: {e}"));
     let height = 420 * panels.len() as u32;
     let root = SVGBackend::new(path, (900, height)).into_drawing_area();
     root.fill(&WHITE).map_err(|e| err(e.to_string()))?;

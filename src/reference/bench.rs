@@ -9,8 +9,13 @@ use crate::study::bench::Solution;
 /// Solves `scene` with IDA at rtol (atol = rtol, as in `anm reference ida`'s
 /// default pairing) and returns it in the benchmark's shape.
 pub fn bench_solution(scene: &FrictionScene, rtol: f64) -> Result<Solution> {
-    let run = super::solve(scene, rtol, rtol)
-        .map_err(|e| Error::Output(format!("{}: IDA: {e}", scene.file.display())))?;
+    let run = super::solve(scene, rtol, rtol).map_err(|e| {
+        Error::study(
+            "bench",
+            scene.file.display().to_string(),
+            format!("IDA: {e}"),
+        )
+    })?;
     let c = &run.counters;
     let stats = Stats {
         steps: c.steps.max(0) as usize,

@@ -170,7 +170,11 @@ fn check_rigid_modes(scene: &ShellScene) -> Result<()> {
             let mut e = Vec3::zeros();
             e[j % 3] = 1.0;
             let motion = if d.component.is_displacement() {
-                if j < 3 { e } else { e.cross(&(x0[d.node] - c)) / size }
+                if j < 3 {
+                    e
+                } else {
+                    e.cross(&(x0[d.node] - c)) / size
+                }
             } else if j < 3 {
                 Vec3::zeros()
             } else {

@@ -89,7 +89,9 @@ pub fn evaluate(model: &ShellModel, probes: &[Probe], s: &State) -> Result<Vec<f
     };
     let selected = |c: &&PairContact, nodes: &Option<Vec<usize>>, obstacle: &Option<usize>| {
         obstacle.is_none_or(|o| c.obstacle == o)
-            && nodes.as_ref().is_none_or(|ns| ns.binary_search(&c.node).is_ok())
+            && nodes
+                .as_ref()
+                .is_none_or(|ns| ns.binary_search(&c.node).is_ok())
     };
     Ok(probes
         .iter()

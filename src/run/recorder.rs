@@ -111,7 +111,7 @@ fn io_err(file: &Path) -> impl Fn(std::io::Error) -> Error + '_ {
 }
 
 fn csv_err(file: &Path) -> impl Fn(csv::Error) -> Error + '_ {
-    move |e| Error::Output(format!("{}: {e}", file.display()))
+    move |e| Error::write(file, e)
 }
 
 /// Opens a streamed CSV: new with its header, or (resume) cut back to its
@@ -125,12 +125,14 @@ fn open_csv(path: &Path, header: &[String], keep: Option<usize>) -> Result<csv::
             .collect::<std::io::Result<_>>()
             .map_err(io_err(path))?;
         if lines.len() != keep + 1 || lines[0] != header.join(",") {
-            return Err(Error::Output(format!(
-                "{}: does not match the checkpoint ({} rows expected with header `{}`): cannot resume",
-                path.display(),
-                keep,
-                header.join(",")
-            )));
+            return Err(Error::Resume {
+                file: path.to_path_buf(),
+                problem: format!(
+                    "does not match the checkpoint ({} rows expected with header `{}`)",
+                    keep,
+                    header.join(",")
+                ),
+            });
         }
         let mut text = lines.join("\n");
         text.push('\n');
@@ -164,8 +166,16 @@ impl<'s> Recorder<'s> {
                 let keep = resumed.as_ref().map(|s| (s.history.len(), s.steps_rows));
                 let step_header: Vec<String> = STEP_COLUMNS.iter().map(|s| s.to_string()).collect();
                 (
-                    Some(open_csv(&d.join("history.csv"), &columns, keep.map(|k| k.0))?),
-                    Some(open_csv(&d.join("steps.csv"), &step_header, keep.map(|k| k.1))?),
+                    Some(open_csv(
+                        &d.join("history.csv"),
+                        &columns,
+                        keep.map(|k| k.0),
+                    )?),
+                    Some(open_csv(
+                        &d.join("steps.csv"),
+                        &step_header,
+                        keep.map(|k| k.1),
+                    )?),
                 )
             }
             None => (None, None),
@@ -230,7 +240,9 @@ impl<'s> Recorder<'s> {
         if let Some(w) = &mut self.history {
             w.write_record(row.iter().map(|x| format!("{x:.17e}")))
                 .and_then(|_| w.flush().map_err(csv::Error::from))
-                .map_err(|e| Error::Output(format!("history.csv: {e}")))?;
+                .map_err(|e| {
+                    Error::write(self.dir.clone().unwrap_or_default().join("history.csv"), e)
+                })?;
         }
         self.state.history.push(row);
         if self
@@ -261,7 +273,9 @@ impl<'s> Recorder<'s> {
             ];
             w.write_record(&rec)
                 .and_then(|_| w.flush().map_err(csv::Error::from))
-                .map_err(|e| Error::Output(format!("steps.csv: {e}")))?;
+                .map_err(|e| {
+                    Error::write(self.dir.clone().unwrap_or_default().join("steps.csv"), e)
+                })?;
         }
         self.state.steps_rows += 1;
         Ok(())
@@ -278,13 +292,16 @@ impl<'s> Recorder<'s> {
                 arclength: 0.0,
             },
         );
-        let v = |a: &[[f64; 3]]| a.iter().map(|x| Vec3::new(x[0], x[1], x[2])).collect::<Vec<_>>();
-        let x: Vec<Vec3> = s
-            .x0
-            .iter()
-            .zip(&s.displacement)
-            .map(|(a, b)| Vec3::new(a[0] + b[0], a[1] + b[1], a[2] + b[2]))
-            .collect();
+        let v = |a: &[[f64; 3]]| {
+            a.iter()
+                .map(|x| Vec3::new(x[0], x[1], x[2]))
+                .collect::<Vec<_>>()
+        };
+        let x: Vec<Vec3> =
+            s.x0.iter()
+                .zip(&s.displacement)
+                .map(|(a, b)| Vec3::new(a[0] + b[0], a[1] + b[1], a[2] + b[2]))
+                .collect();
         write_vtu(
             &d.join(name),
             &x,
@@ -304,8 +321,7 @@ impl<'s> Recorder<'s> {
     pub fn checkpoint<T: Serialize>(&self, value: &T) -> Result<()> {
         let Some(d) = &self.dir else { return Ok(()) };
         let tmp = d.join("checkpoint.json.tmp");
-        let text = serde_json::to_string(value)
-            .map_err(|e| Error::Output(format!("{}: {e}", tmp.display())))?;
+        let text = serde_json::to_string(value).map_err(|e| Error::write(&tmp, e))?;
         let mut f = File::create(&tmp).map_err(io_err(&tmp))?;
         f.write_all(text.as_bytes()).map_err(io_err(&tmp))?;
         f.sync_all().map_err(io_err(&tmp))?;

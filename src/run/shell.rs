@@ -8,8 +8,8 @@
 use super::build::{build_model, far_nodes_may_be_skipped};
 use super::interrupt;
 use super::probe::State;
-use super::recorder::{Recorder, RecorderState, StepRow};
 pub use super::recorder::Snapshot;
+use super::recorder::{Recorder, RecorderState, StepRow};
 use crate::contact::{Obstacle, search};
 use crate::error::{Error, Result};
 use crate::linalg::SparseLu;
@@ -17,9 +17,9 @@ use crate::output::plot::{Curve, Panel, draw};
 use crate::output::vtk::{cylinder_surface, write_pvd, write_vtu};
 use crate::output::{Stop, write_csv, write_json};
 use crate::scene::shell::{Method, ShellScene, load};
+use crate::series::correct::Metric;
 use crate::series::path::{Checkpoint, Path as AnmPath};
 use crate::series::stop::Stop as PathStop;
-use crate::series::correct::Metric;
 use crate::series::{ContinuationProblem, Stats, correct};
 use crate::shell::ShellModel;
 use serde::{Deserialize, Serialize};
@@ -198,6 +198,49 @@ fn state_at(step: &crate::series::PathStep, g: f64) -> Option<Vec<f64>> {
     })
 }
 
+/// The output grid values met by an accepted step, in path order, with the
+/// path parameter a and the state there: between the step's start and end
+/// lambda where lambda is monotone over the step; every crossing of every
+/// grid value where the step turns back through a limit point.
+fn grid_points(
+    rec: &Recorder,
+    step: &crate::series::PathStep,
+) -> Result<Vec<(f64, f64, Vec<f64>)>> {
+    let off = |g: f64| Error::OffPath {
+        step: step.index,
+        param: "lambda",
+        at: g,
+        what: format!(
+            "output grid value in [{}, {}] on neither the series nor its correction",
+            step.lambda[0], step.lambda_end
+        ),
+    };
+    if step.lambda_is_monotone() {
+        return rec
+            .grid_between(step.lambda[0], step.lambda_end)
+            .into_iter()
+            .map(|g| {
+                let u = state_at(step, g).ok_or_else(|| off(g))?;
+                Ok((step.a_at_lambda(g).unwrap_or(step.length), g, u))
+            })
+            .collect();
+    }
+    // Turning back: the range of lambda over the step, every crossing.
+    let samples: Vec<f64> = (0..=32)
+        .map(|i| step.eval(step.length * i as f64 / 32.0).1)
+        .collect();
+    let lo = samples.iter().copied().fold(f64::INFINITY, f64::min);
+    let hi = samples.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let mut points = vec![];
+    for g in rec.grid_between(lo - 1e-300, hi) {
+        for a in step.a_at_lambda_all(g) {
+            points.push((a, g, step.eval(a).0));
+        }
+    }
+    points.sort_by(|x, y| x.0.total_cmp(&y.0));
+    Ok(points)
+}
+
 /// Scaled length of a chord (du, dlambda): displacements against the
 /// model's characteristic length, lambda against its range.
 fn chord(model: &ShellModel, du: &[f64], dl: f64, lambda_scale: f64) -> f64 {
@@ -291,14 +334,7 @@ fn run_inner(
                     rec.state.active_sum += model.pairs.len();
                 }
                 let arc0 = rec.state.arclength;
-                for g in rec.grid_between(step.lambda[0], step.lambda_end) {
-                    let u = state_at(&step, g).ok_or_else(|| {
-                        Error::Output(format!(
-                            "step {}: lambda grid value {g} lies in [{}, {}] but on neither the series nor its correction",
-                            step.index, step.lambda[0], step.lambda_end
-                        ))
-                    })?;
-                    let a = step.a_at_lambda(g).unwrap_or(step.length);
+                for (a, g, u) in grid_points(&rec, &step)? {
                     let before = grid_stats.factorizations;
                     let (u, iterations) = correct::correct_at_lambda(
                         model,
@@ -598,7 +634,9 @@ fn finish_files(rec: &mut Recorder, model: &ShellModel, full: &[f64], lambda: f6
                 axis,
                 radius,
             } => cylinder_surface(centre, axis, *radius, 1.5 * size.min(4.0 * radius), 96),
-            Obstacle::Plane { point, normal } => cylinder_surface(point, normal, 0.5 * size, 0.0, 4),
+            Obstacle::Plane { point, normal } => {
+                cylinder_surface(point, normal, 0.5 * size, 0.0, 4)
+            }
         };
         let name = format!("obstacle_{k}.vtu");
         write_vtu(&d.join(&name), &pts, &quads, &[])?;
@@ -635,7 +673,9 @@ fn finish_files(rec: &mut Recorder, model: &ShellModel, full: &[f64], lambda: f6
     if !rows.is_empty() {
         write_csv(
             &d.join("contact_final.csv"),
-            &["node", "obstacle", "X", "Y", "Z", "gap", "rn", "fx", "fy", "fz"],
+            &[
+                "node", "obstacle", "X", "Y", "Z", "gap", "rn", "fx", "fy", "fz",
+            ],
             &rows,
         )?;
     }
@@ -673,10 +713,7 @@ fn plot(path: &Path, scene: &ShellScene, report: &RunReport) -> Result<()> {
             format!("{stem}: {what}")
         })
         .collect();
-    let ylabels: Vec<String> = groups
-        .iter()
-        .map(|(u, _)| format!("value ({u})"))
-        .collect();
+    let ylabels: Vec<String> = groups.iter().map(|(u, _)| format!("value ({u})")).collect();
     let panels: Vec<Panel> = groups
         .iter()
         .enumerate()

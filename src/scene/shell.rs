@@ -233,9 +233,15 @@ pub enum Quantity {
         component: Component,
     },
     /// Current position component (axis 0, 1, 2), averaged over the nodes.
-    Position { nodes: Vec<usize>, axis: usize },
+    Position {
+        nodes: Vec<usize>,
+        axis: usize,
+    },
     /// Resultant of the support reactions of fixed nodes along an axis.
-    Reaction { nodes: Vec<usize>, axis: usize },
+    Reaction {
+        nodes: Vec<usize>,
+        axis: usize,
+    },
     /// Sum of the normal contact reactions R (N) of the nodes (all contact
     /// nodes if None) against one obstacle (all if None).
     ContactNormal {
@@ -249,9 +255,13 @@ pub enum Quantity {
         axis: usize,
     },
     /// Smallest gap of a contact node (m).
-    MinGap { obstacle: Option<usize> },
+    MinGap {
+        obstacle: Option<usize>,
+    },
     /// Number of contact nodes at or past the obstacle surface (gap <= 0).
-    Contacts { obstacle: Option<usize> },
+    Contacts {
+        obstacle: Option<usize>,
+    },
     Lambda,
     /// Scaled arclength a summed along the path (dimensionless).
     Arclength,
@@ -310,7 +320,10 @@ pub struct ShellScene {
 impl ShellScene {
     /// The column of history.csv of a probe name (lambda is column 0).
     pub fn column(&self, name: &str) -> Option<usize> {
-        self.probes.iter().position(|p| p.name == name).map(|i| i + 1)
+        self.probes
+            .iter()
+            .position(|p| p.name == name)
+            .map(|i| i + 1)
     }
 
     /// The key output of the studies (audit, bench, stress): the first probe.
@@ -397,13 +410,16 @@ impl Ctx<'_> {
     }
 
     /// Nodes of exactly one of `point` or `group`.
-    fn nodes(&self, point: Option<[f64; 3]>, group: &Option<String>, key: &str) -> Result<Vec<usize>> {
+    fn nodes(
+        &self,
+        point: Option<[f64; 3]>,
+        group: &Option<String>,
+        key: &str,
+    ) -> Result<Vec<usize>> {
         match (point, group) {
             (Some(p), None) => Ok(vec![self.point(p, &format!("{key}.point"))?]),
             (None, Some(g)) => self.group(g, &format!("{key}.group")),
-            _ => Err(self
-                .c
-                .fail(key, "give exactly one of `point` or `group`")),
+            _ => Err(self.c.fail(key, "give exactly one of `point` or `group`")),
         }
     }
 }
@@ -443,7 +459,8 @@ pub fn load(path: &Path) -> Result<ShellScene> {
     };
     for (i, g) in raw.group.iter().enumerate() {
         let key = format!("group[{i}]");
-        if g.name.is_empty() || mesh.groups.contains_key(&g.name) || ctx.extra.contains_key(&g.name) {
+        if g.name.is_empty() || mesh.groups.contains_key(&g.name) || ctx.extra.contains_key(&g.name)
+        {
             return Err(c.fail(
                 &format!("{key}.name"),
                 format!("`{}` is empty or already a group name", g.name),
@@ -460,7 +477,11 @@ pub fn load(path: &Path) -> Result<ShellScene> {
         if nodes.is_empty() {
             return Err(c.fail(
                 &format!("{key}.box"),
-                format!("no node of {} in the box {:?}", mesh.file.display(), g.bounds),
+                format!(
+                    "no node of {} in the box {:?}",
+                    mesh.file.display(),
+                    g.bounds
+                ),
             ));
         }
         ctx.extra.insert(g.name.clone(), nodes);
@@ -477,7 +498,10 @@ pub fn load(path: &Path) -> Result<ShellScene> {
     let contact = match &raw.contact {
         Some(ct) => {
             if obstacles.is_empty() {
-                return Err(c.fail("obstacle", "missing: [contact] needs at least one [[obstacle]]"));
+                return Err(c.fail(
+                    "obstacle",
+                    "missing: [contact] needs at least one [[obstacle]]",
+                ));
             }
             Some(ContactSpec {
                 nodes: ctx.group(&ct.group, "contact.group")?,
@@ -566,7 +590,10 @@ fn mesh(c: &Checker, path: &Path, m: &RawMesh) -> Result<Mesh> {
     };
     let unused = |key: &str, present: bool, kind: &str| -> Result<()> {
         if present {
-            Err(c.fail(key, format!("not used by a mesh of type `{kind}`; remove it")))
+            Err(c.fail(
+                key,
+                format!("not used by a mesh of type `{kind}`; remove it"),
+            ))
         } else {
             Ok(())
         }
@@ -576,7 +603,10 @@ fn mesh(c: &Checker, path: &Path, m: &RawMesh) -> Result<Mesh> {
             .divisions
             .ok_or_else(|| c.fail("mesh.divisions", "missing: required by this mesh type"))?;
         if d[0] == 0 || d[1] == 0 || d[0].saturating_mul(d[1]) > 1_000_000 {
-            return Err(c.fail("mesh.divisions", format!("needs 1 to 1e6 elements in all, got {d:?}")));
+            return Err(c.fail(
+                "mesh.divisions",
+                format!("needs 1 to 1e6 elements in all, got {d:?}"),
+            ));
         }
         Ok((d[0], d[1]))
     };
@@ -740,7 +770,9 @@ fn fixes(ctx: &Ctx, raw: &[RawFix]) -> Result<BTreeMap<Dof, f64>> {
                 other => {
                     return Err(c.fail(
                         &format!("{key}.symmetry"),
-                        format!("expected \"x\", \"y\" or \"z\" (the plane's normal), got \"{other}\""),
+                        format!(
+                            "expected \"x\", \"y\" or \"z\" (the plane's normal), got \"{other}\""
+                        ),
                     ));
                 }
             }
@@ -809,16 +841,25 @@ fn loads(ctx: &Ctx, raw: &[RawLoad]) -> Result<Vec<Load>> {
                 "only a `pressure` can be follower (a `moment` is always applied as m × a3)",
             ));
         }
-        let targets = [l.point.is_some(), l.group.is_some(), l.edge.is_some(), l.surface.is_some()];
+        let targets = [
+            l.point.is_some(),
+            l.group.is_some(),
+            l.edge.is_some(),
+            l.surface.is_some(),
+        ];
         if targets.iter().filter(|x| **x).count() != 1 {
-            return Err(c.fail(&key, "give exactly one of `point`, `group`, `edge` or `surface`"));
+            return Err(c.fail(
+                &key,
+                "give exactly one of `point`, `group`, `edge` or `surface`",
+            ));
         }
-        let wrong = |what: &str, needs: &str| {
-            c.fail(&key, format!("`{what}` needs {needs}"))
-        };
+        let wrong = |what: &str, needs: &str| c.fail(&key, format!("`{what}` needs {needs}"));
         let load = if let Some(f) = l.force {
             if l.edge.is_some() || l.surface.is_some() {
-                return Err(wrong("force", "`point` or `group` (a force per node; use `line_force` on an edge, `traction` on a surface)"));
+                return Err(wrong(
+                    "force",
+                    "`point` or `group` (a force per node; use `line_force` on an edge, `traction` on a surface)",
+                ));
             }
             Load::Nodal {
                 nodes: ctx.nodes(l.point, &l.group, &key)?,
@@ -866,14 +907,20 @@ fn loads(ctx: &Ctx, raw: &[RawLoad]) -> Result<Vec<Load>> {
 
 fn edge_group(ctx: &Ctx, name: &str, key: &str) -> Result<Vec<[usize; 2]>> {
     if ctx.extra.contains_key(name) {
-        return Err(ctx.c.fail(key, format!("`{name}` is a [[group]] of nodes, not a group of edges")));
+        return Err(ctx.c.fail(
+            key,
+            format!("`{name}` is a [[group]] of nodes, not a group of edges"),
+        ));
     }
     Ok(ctx.mesh.edges(name, ctx.c.file, key)?.to_vec())
 }
 
 fn surface_group(ctx: &Ctx, name: &str, key: &str) -> Result<Vec<usize>> {
     if ctx.extra.contains_key(name) {
-        return Err(ctx.c.fail(key, format!("`{name}` is a [[group]] of nodes, not a group of elements")));
+        return Err(ctx.c.fail(
+            key,
+            format!("`{name}` is a [[group]] of nodes, not a group of elements"),
+        ));
     }
     Ok(ctx.mesh.surface(name, ctx.c.file, key)?.to_vec())
 }
@@ -885,13 +932,19 @@ fn obstacles(ctx: &Ctx, raw: &[RawObstacle]) -> Result<Vec<ObstacleSpec>> {
         let key = |k: &str| format!("obstacle[{i}].{k}");
         let need = |v: Option<[f64; 3]>, k: &str| -> Result<Vec3> {
             let v = v.ok_or_else(|| {
-                c.fail(&key(k), format!("missing: required by a `{}` obstacle", o.kind))
+                c.fail(
+                    &key(k),
+                    format!("missing: required by a `{}` obstacle", o.kind),
+                )
             })?;
             ctx.finite3(&key(k), v)
         };
         let not = |v: bool, k: &str| -> Result<()> {
             if v {
-                Err(c.fail(&key(k), format!("not used by a `{}` obstacle; remove it", o.kind)))
+                Err(c.fail(
+                    &key(k),
+                    format!("not used by a `{}` obstacle; remove it", o.kind),
+                ))
             } else {
                 Ok(())
             }
@@ -932,7 +985,9 @@ fn obstacles(ctx: &Ctx, raw: &[RawObstacle]) -> Result<Vec<ObstacleSpec>> {
                 match m.kind.as_str() {
                     "fixed" => {
                         if m.velocity.is_some() || m.omega.is_some() {
-                            return Err(c.fail(&mk("type"), "a `fixed` motion takes no velocity or omega"));
+                            return Err(
+                                c.fail(&mk("type"), "a `fixed` motion takes no velocity or omega")
+                            );
                         }
                         Motion::Fixed
                     }
@@ -971,7 +1026,11 @@ fn obstacles(ctx: &Ctx, raw: &[RawObstacle]) -> Result<Vec<ObstacleSpec>> {
         if out.iter().any(|x| x.name == name) {
             return Err(c.fail(&key("name"), format!("`{name}` names two obstacles")));
         }
-        out.push(ObstacleSpec { name, shape, motion });
+        out.push(ObstacleSpec {
+            name,
+            shape,
+            motion,
+        });
     }
     Ok(out)
 }
@@ -1018,17 +1077,27 @@ fn probes(
                     &format!("{key}.obstacle"),
                     format!(
                         "no obstacle named `{o}` (have: {})",
-                        obstacles.iter().map(|x| x.name.as_str()).collect::<Vec<_>>().join(", ")
+                        obstacles
+                            .iter()
+                            .map(|x| x.name.as_str())
+                            .collect::<Vec<_>>()
+                            .join(", ")
                     ),
                 )
             })?),
         };
         let is_contact = q.starts_with("contact") || q == "min_gap";
         if obstacle.is_some() && !is_contact {
-            return Err(c.fail(&format!("{key}.obstacle"), format!("not used by a `{q}` probe")));
+            return Err(c.fail(
+                &format!("{key}.obstacle"),
+                format!("not used by a `{q}` probe"),
+            ));
         }
         if is_contact && !has_contact {
-            return Err(c.fail(&format!("{key}.quantity"), format!("`{q}` needs a [contact] table")));
+            return Err(c.fail(
+                &format!("{key}.quantity"),
+                format!("`{q}` needs a [contact] table"),
+            ));
         }
         let no_target = |what: &str| -> Result<()> {
             if p.point.is_some() || p.group.is_some() {
@@ -1063,10 +1132,16 @@ fn probes(
         } else if let Some(axis) = q.strip_prefix("reaction_").and_then(axis_of) {
             let nodes = ctx.nodes(p.point, &p.group, &key)?;
             let comp = Component::DISPLACEMENT[axis];
-            if let Some(&n) = nodes.iter().find(|&&n| !fixed.contains_key(&Dof::new(n, comp))) {
+            if let Some(&n) = nodes
+                .iter()
+                .find(|&&n| !fixed.contains_key(&Dof::new(n, comp)))
+            {
                 return Err(c.fail(
                     &key,
-                    format!("a reaction needs fixed dofs, but {} is free", Dof::new(n, comp)),
+                    format!(
+                        "a reaction needs fixed dofs, but {} is free",
+                        Dof::new(n, comp)
+                    ),
                 ));
             }
             (Quantity::Reaction { nodes, axis }, "N")
@@ -1117,7 +1192,10 @@ fn probes(
 fn solver(c: &Checker, s: &RawSolver, size: f64) -> Result<(Method, ContinuationConfig, f64)> {
     let lambda_end = c.finite("solver.lambda_end", s.lambda_end)?;
     if lambda_end == 0.0 {
-        return Err(c.fail("solver.lambda_end", "must differ from 0 (the path starts at lambda = 0)"));
+        return Err(c.fail(
+            "solver.lambda_end",
+            "must differ from 0 (the path starts at lambda = 0)",
+        ));
     }
     let order = s.order.unwrap_or(15);
     if !(2..=60).contains(&order) {
@@ -1157,7 +1235,10 @@ fn solver(c: &Checker, s: &RawSolver, size: f64) -> Result<(Method, Continuation
     let method_name = s.method.as_deref().unwrap_or("anm");
     let refuse = |keys: &[(&str, bool)]| -> Result<()> {
         match keys.iter().find(|(_, present)| *present) {
-            Some((k, _)) => Err(c.fail(k, format!("not used by solver.method = \"{method_name}\"; remove it"))),
+            Some((k, _)) => Err(c.fail(
+                k,
+                format!("not used by solver.method = \"{method_name}\"; remove it"),
+            )),
             None => Ok(()),
         }
     };

@@ -162,6 +162,49 @@ impl PathStep {
         }
         Some(0.5 * (lo + hi))
     }
+
+    /// Whether lambda(a) of the step's polynomial series is monotone over
+    /// [0, length] (sampled at 32 points): false where the step turns back
+    /// through a limit point of lambda.
+    pub fn lambda_is_monotone(&self) -> bool {
+        let k = 32;
+        let l: Vec<f64> = (0..=k)
+            .map(|i| super::taylor::eval(&self.lambda, self.length * i as f64 / k as f64))
+            .collect();
+        l.windows(2).all(|w| w[1] >= w[0]) || l.windows(2).all(|w| w[1] <= w[0])
+    }
+
+    /// Every a in (0, length] where lambda(a) = target, in increasing order:
+    /// the states at a lambda on a step that turns back through a limit
+    /// point (32 samples, bisection on each sign change).
+    pub fn a_at_lambda_all(&self, target: f64) -> Vec<f64> {
+        let f = |a: f64| self.eval(a).1 - target;
+        let k = 32;
+        let mut out = vec![];
+        let mut a0 = 0.0;
+        let mut f0 = f(0.0);
+        for i in 1..=k {
+            let a1 = self.length * i as f64 / k as f64;
+            let f1 = f(a1);
+            if f1 == 0.0 {
+                out.push(a1);
+            } else if f0 != 0.0 && f0.signum() != f1.signum() {
+                let (mut lo, mut hi) = (a0, a1);
+                for _ in 0..60 {
+                    let mid = 0.5 * (lo + hi);
+                    if f(mid).signum() == f0.signum() {
+                        lo = mid;
+                    } else {
+                        hi = mid;
+                    }
+                }
+                out.push(0.5 * (lo + hi));
+            }
+            a0 = a1;
+            f0 = f1;
+        }
+        out
+    }
 }
 
 pub(crate) fn stack_terms(u: &[Vec<f64>], lambda: &[f64]) -> Vec<Vec<f64>> {

@@ -166,7 +166,27 @@ pub fn clone_error(e: &Error) -> Error {
             at: *at,
             length: *length,
         },
-        Error::Output(m) => Error::Output(m.clone()),
+        Error::Write { file, problem } => Error::write(file.clone(), problem),
+        Error::Study {
+            study,
+            case,
+            problem,
+        } => Error::study(study, case.clone(), problem),
+        Error::OffPath {
+            step,
+            param,
+            at,
+            what,
+        } => Error::OffPath {
+            step: *step,
+            param,
+            at: *at,
+            what: what.clone(),
+        },
+        Error::Resume { file, problem } => Error::Resume {
+            file: file.clone(),
+            problem: problem.clone(),
+        },
         Error::ContactMissed {
             param,
             at,

@@ -457,8 +457,7 @@ impl ShellModel {
             let pair = &self.pairs[ps.pair];
             let m = ps.gap.orders();
             let v = self.motions[pair.obstacle].velocity();
-            ps.gap
-                .complete(&(Self::vec3(&full, pair.node, 0) - v * lm));
+            ps.gap.complete(&(Self::vec3(&full, pair.node, 0) - v * lm));
             let rm = pair.law.force_coeff(&ps.r, &ps.gap.h, m);
             ps.r.push(rm);
         }
@@ -496,12 +495,12 @@ impl ContinuationProblem for ShellModel {
             *r = -f;
         }
         let prescribed = &self.prescribed;
-        let mut add = |free: &[Option<usize>], rl: &mut [f64], gi: usize, gj: usize, v: f64| {
-            match (free[gi], free[gj]) {
-                (Some(i), Some(j)) => k.add(i, j, v),
-                (Some(_), None) => rl[gi] += v * prescribed[gj],
-                _ => {}
-            }
+        let mut add = |free: &[Option<usize>], rl: &mut [f64], gi: usize, gj: usize, v: f64| match (
+            free[gi], free[gj],
+        ) {
+            (Some(i), Some(j)) => k.add(i, j, v),
+            (Some(_), None) => rl[gi] += v * prescribed[gj],
+            _ => {}
         };
         for (e, st) in self.elements.iter().zip(&self.el_series) {
             let ke = st.tangent();
@@ -622,7 +621,9 @@ impl ContinuationProblem for ShellModel {
                 let xs: Vec<[Vec3; 4]> = (0..p)
                     .map(|s| self.pressure_x(pr, &fulls[s], s == 0))
                     .collect();
-                let b = |i: usize, j: usize| surface_load::follower_bilinear(pr.pressure, &xs[i], &xs[j]);
+                let b = |i: usize, j: usize| {
+                    surface_load::follower_bilinear(pr.pressure, &xs[i], &xs[j])
+                };
                 let mut total = [Vec3::zeros(); 4];
                 let mut accumulate = |scale: f64, f: [Vec3; 4]| {
                     for i in 0..4 {

@@ -198,10 +198,12 @@ pub fn audit(scene: &FrictionScene, sweeps: &Sweeps) -> Result<Vec<AuditRow>> {
             .filter(|((n, _, _), _)| *n == name)
             .map(|((_, v, _), r)| match r {
                 Ok(Ok(run)) => Ok((*v, run)),
-                Ok(Err(e)) => Err(Error::Output(format!("audit run {name} = {v}: {e}"))),
-                Err(panic) => Err(Error::Output(format!(
-                    "audit run {name} = {v} panicked: {panic}"
-                ))),
+                Ok(Err(e)) => Err(Error::study("audit", format!("{name} = {v}"), e)),
+                Err(panic) => Err(Error::study(
+                    "audit",
+                    format!("{name} = {v}"),
+                    format!("panicked: {panic}"),
+                )),
             })
             .collect::<Result<_>>()?;
         if group.is_empty() {
@@ -335,10 +337,10 @@ pub fn write(scene: &FrictionScene, rows: &[AuditRow], dir: &Path) -> Result<()>
         file: dir.to_path_buf(),
         source: e,
     };
-    let mut w =
-        csv::Writer::from_path(dir.join("audit.csv")).map_err(|e| Error::Output(e.to_string()))?;
+    let mut w = csv::Writer::from_path(dir.join("audit.csv"))
+        .map_err(|e| Error::write(dir.join("audit.csv"), e))?;
     w.write_record(HEADER)
-        .map_err(|e| Error::Output(e.to_string()))?;
+        .map_err(|e| Error::write(dir.join("audit.csv"), e))?;
     for r in rows {
         w.write_record([
             r.parameter.to_string(),
@@ -353,7 +355,7 @@ pub fn write(scene: &FrictionScene, rows: &[AuditRow], dir: &Path) -> Result<()>
             r.factorizations.to_string(),
             format!("{:e}", r.wall_s),
         ])
-        .map_err(|e| Error::Output(e.to_string()))?;
+        .map_err(|e| Error::write(dir.join("audit.csv"), e))?;
     }
     w.flush().map_err(io)?;
     std::fs::write(dir.join("audit.md"), markdown(scene, rows)).map_err(io)?;

@@ -110,10 +110,11 @@ fn ida(scene: &FrictionScene, rtol: f64) -> Result<Solution> {
 
 #[cfg(not(feature = "reference"))]
 fn ida(scene: &FrictionScene, _rtol: f64) -> Result<Solution> {
-    Err(crate::Error::Output(format!(
-        "{}: IDA needs a build with `--features reference`",
-        scene.file.display()
-    )))
+    Err(crate::Error::study(
+        "bench",
+        scene.file.display().to_string(),
+        "IDA needs a build with `--features reference`",
+    ))
 }
 
 /// One benchmark row.
@@ -297,9 +298,9 @@ pub fn markdown(rows: &[BenchRow], reference_name: &str) -> String {
 pub fn write(rows: &[BenchRow], reference_name: &str, dir: &Path) -> Result<()> {
     create_dir(dir)?;
     let mut w = csv::Writer::from_path(dir.join("bench.csv"))
-        .map_err(|e| crate::Error::Output(e.to_string()))?;
+        .map_err(|e| crate::Error::write(dir.join("bench.csv"), e))?;
     w.write_record(HEADER)
-        .map_err(|e| crate::Error::Output(e.to_string()))?;
+        .map_err(|e| crate::Error::write(dir.join("bench.csv"), e))?;
     for r in rows {
         let mut rec = vec![r.case.clone(), r.method.clone(), r.setting.clone()];
         rec.extend([r.error, r.wall_s, r.wall_min_s].map(|x| format!("{x:e}")));
@@ -307,7 +308,7 @@ pub fn write(rows: &[BenchRow], reference_name: &str, dir: &Path) -> Result<()> 
         rec.extend(r.breakdown.map(|x| format!("{x:e}")));
         rec.push(r.stop.clone());
         w.write_record(rec)
-            .map_err(|e| crate::Error::Output(e.to_string()))?;
+            .map_err(|e| crate::Error::write(dir.join("bench.csv"), e))?;
     }
     w.flush().map_err(|e| crate::Error::Io {
         file: dir.join("bench.csv"),

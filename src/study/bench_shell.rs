@@ -176,15 +176,18 @@ fn complete(report: RunReport) -> Result<RunReport> {
     if report.stop.reason == "end" {
         Ok(report)
     } else {
-        Err(crate::Error::Output(format!(
-            "{}: the reference run stopped early: {}",
-            report.scene,
-            report
-                .stop
-                .message
-                .as_deref()
-                .unwrap_or(&report.stop.reason)
-        )))
+        Err(crate::Error::study(
+            "bench",
+            report.scene.clone(),
+            format!(
+                "the reference run stopped early: {}",
+                report
+                    .stop
+                    .message
+                    .as_deref()
+                    .unwrap_or(&report.stop.reason)
+            ),
+        ))
     }
 }
 
@@ -428,7 +431,12 @@ pub fn skip_study(scene: &ShellScene, out_dir: &std::path::Path) -> Result<Vec<S
             mean_contact_terms: r.mean_active_contacts.unwrap_or(f64::NAN),
             steps: r.steps,
             wall_s: r.wall_s,
-            key_end: r.history.last().and_then(|row| row.get(1)).copied().unwrap_or(f64::NAN),
+            key_end: r
+                .history
+                .last()
+                .and_then(|row| row.get(1))
+                .copied()
+                .unwrap_or(f64::NAN),
         });
     }
     Ok(rows)

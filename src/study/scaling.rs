@@ -88,7 +88,7 @@ fn write_case(
         .and_then(|o| o.as_integer())
         .unwrap_or(0) as usize;
     let path = dir.join(format!("scene-{nx}x{ny}.toml"));
-    let out = toml::to_string(&scene).map_err(|e| Error::Output(e.to_string()))?;
+    let out = toml::to_string(&scene).map_err(|e| Error::write(&path, e))?;
     std::fs::write(&path, out).map_err(io(&path))?;
     Ok((path, order))
 }
@@ -117,14 +117,19 @@ pub fn run(
             .map_err(io(exe))?;
         let summary = out.join("summary.json");
         let text = std::fs::read_to_string(&summary).map_err(|e| {
-            Error::Output(format!(
-                "{}: no summary ({e}); the run printed: {}",
-                scene.display(),
-                String::from_utf8_lossy(&status.stderr)
-            ))
+            Error::study(
+                "scaling",
+                scene.display().to_string(),
+                format!(
+                    "no summary ({e}); the run printed: {}",
+                    String::from_utf8_lossy(&status.stderr)
+                ),
+            )
         })?;
-        let v: serde_json::Value =
-            serde_json::from_str(&text).map_err(|e| Error::Output(format!("{e}")))?;
+        let v: serde_json::Value = serde_json::from_str(&text).map_err(|e| Error::Parse {
+            file: summary.clone(),
+            message: e.to_string(),
+        })?;
         let num = |k: &str| v["stats"][k].as_f64().unwrap_or(f64::NAN);
         let steps_done = v["steps"].as_u64().unwrap_or(0) as usize;
         let per = |k: &str| num(k) / steps_done.max(1) as f64;

@@ -14,9 +14,9 @@ use super::audit::Sweeps;
 use super::pool;
 use super::shell_check::{ShellCheck, check, with_grid_snapshots};
 use crate::error::{Error, Result};
-use crate::run::{RunReport, run_loaded};
 use crate::output::create_dir;
 use crate::output::plot::{Curve, Panel, draw};
+use crate::run::{RunReport, run_loaded};
 use crate::scene::shell::ShellScene;
 use std::path::Path;
 
@@ -154,10 +154,12 @@ pub fn audit(scene: &ShellScene, sweeps: &Sweeps) -> Result<Vec<ShellAuditRow>> 
             .filter(|((n, _, _), _)| *n == name)
             .map(|((_, v, _), r)| match r {
                 Ok(Ok((run, c))) => Ok((*v, run, c)),
-                Ok(Err(e)) => Err(Error::Output(format!("audit run {name} = {v}: {e}"))),
-                Err(panic) => Err(Error::Output(format!(
-                    "audit run {name} = {v} panicked: {panic}"
-                ))),
+                Ok(Err(e)) => Err(Error::study("audit", format!("{name} = {v}"), e)),
+                Err(panic) => Err(Error::study(
+                    "audit",
+                    format!("{name} = {v}"),
+                    format!("panicked: {panic}"),
+                )),
             })
             .collect::<Result<_>>()?;
         if group.is_empty() {
@@ -265,14 +267,19 @@ fn names(scene: &ShellScene) -> (String, String) {
 
 /// The table as Markdown.
 pub fn markdown(scene: &ShellScene, rows: &[ShellAuditRow]) -> String {
-    let (eta, k) = scene.contact.as_ref().map_or((f64::NAN, f64::NAN), |c| (c.eta, c.k));
+    let (eta, k) = scene
+        .contact
+        .as_ref()
+        .map_or((f64::NAN, f64::NAN), |c| (c.eta, c.k));
     let (key, contact) = names(scene);
     let end = scene.solver.lambda_end;
     let mut s = format!(
         "Regularization audit of `{}` (scene eta = {eta:e} N, K = {k:e} N/m; deviations from the least regularized run of each sweep)\n\n",
         scene.file.display(),
     );
-    s += &format!("| parameter | value | stop | lambda | {key}({end}) | deviation | {contact}({end}) (N) | deviation | trajectory deviation | contact Fx, Fz (N) | support Fx, Fz (N) | abs(P + C + S)/abs(P) | max abs(R)/abs(F) | far nodes | steps | factorizations | wall (s) | reference |\n");
+    s += &format!(
+        "| parameter | value | stop | lambda | {key}({end}) | deviation | {contact}({end}) (N) | deviation | trajectory deviation | contact Fx, Fz (N) | support Fx, Fz (N) | abs(P + C + S)/abs(P) | max abs(R)/abs(F) | far nodes | steps | factorizations | wall (s) | reference |\n"
+    );
     s += "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
     for r in rows {
         s += &format!(
@@ -321,7 +328,7 @@ pub fn write(scene: &ShellScene, rows: &[ShellAuditRow], dir: &Path) -> Result<(
         file: dir.to_path_buf(),
         source: e,
     };
-    let out = |e: csv::Error| Error::Output(e.to_string());
+    let out = |e: csv::Error| Error::write(dir.join("audit.csv"), e);
     let mut w = csv::Writer::from_path(dir.join("audit.csv")).map_err(out)?;
     w.write_record(HEADER).map_err(out)?;
     for r in rows {

@@ -18,7 +18,6 @@
 
 #![cfg(feature = "reference")]
 
-use crate::common;
 use anm::run::{RunReport, Snapshot, run_loaded};
 use std::path::Path;
 use std::sync::OnceLock;

@@ -61,7 +61,10 @@ fn sigterm_stops_at_a_step_end_and_resume_matches_an_uninterrupted_run() {
             break;
         }
         assert!(start.elapsed() < Duration::from_secs(120), "run too slow");
-        assert!(child.try_wait().unwrap().is_none(), "the run ended before it could be interrupted");
+        assert!(
+            child.try_wait().unwrap().is_none(),
+            "the run ended before it could be interrupted"
+        );
         std::thread::sleep(Duration::from_millis(2));
     }
     Command::new("kill")
@@ -82,8 +85,14 @@ fn sigterm_stops_at_a_step_end_and_resume_matches_an_uninterrupted_run() {
     assert_eq!(steps.last().unwrap()[2], lambda);
     assert_eq!(s["steps"].as_u64().unwrap() as usize, steps.len());
     let last = history.last().unwrap()[0];
-    assert!(last <= lambda + 1e-12 && lambda - last < 0.01 + 1e-12, "last row {last}, stop {lambda}");
-    assert!(!cut.join("shell_final.vtu").exists(), "no final-state file for an interrupted run");
+    assert!(
+        last <= lambda + 1e-12 && lambda - last < 0.01 + 1e-12,
+        "last row {last}, stop {lambda}"
+    );
+    assert!(
+        !cut.join("shell_final.vtu").exists(),
+        "no final-state file for an interrupted run"
+    );
 
     let st = Command::new(env!("CARGO_BIN_EXE_anm"))
         .args(["run", "--quiet", "--resume"])
@@ -92,7 +101,10 @@ fn sigterm_stops_at_a_step_end_and_resume_matches_an_uninterrupted_run() {
         .unwrap();
     assert_eq!(st.code(), Some(0));
     assert_eq!(summary(&cut)["stop"]["reason"], "end");
-    let (a, b) = (rows(&full.join("history.csv")), rows(&cut.join("history.csv")));
+    let (a, b) = (
+        rows(&full.join("history.csv")),
+        rows(&cut.join("history.csv")),
+    );
     assert_eq!(a.len(), b.len());
     let mut worst = 0.0f64;
     for k in 0..a[0].len() {
@@ -103,7 +115,10 @@ fn sigterm_stops_at_a_step_end_and_resume_matches_an_uninterrupted_run() {
     }
     println!("resumed vs uninterrupted: max relative difference {worst:.2e}");
     assert!(worst <= 1e-12, "{worst:e}");
-    assert_eq!(rows(&full.join("steps.csv")).len(), rows(&cut.join("steps.csv")).len());
+    assert_eq!(
+        rows(&full.join("steps.csv")).len(),
+        rows(&cut.join("steps.csv")).len()
+    );
 }
 
 #[test]

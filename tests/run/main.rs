@@ -5,5 +5,5 @@
 mod common;
 
 mod interrupt_resume;
-mod units;
 mod stability;
+mod units;

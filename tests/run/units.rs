@@ -34,11 +34,25 @@ fn compare(m: &RunReport, mm: &RunReport, length: &[&str]) {
         m.steps, mm.steps, m.factorizations, mm.factorizations
     );
     let ratio = mm.steps as f64 / m.steps as f64;
-    assert!((ratio - 1.0).abs() <= 0.05, "steps {} vs {}", m.steps, mm.steps);
+    assert!(
+        (ratio - 1.0).abs() <= 0.05,
+        "steps {} vs {}",
+        m.steps,
+        mm.steps
+    );
     assert_eq!(m.history.len(), mm.history.len());
     for (k, c) in m.columns.iter().enumerate() {
-        let f = if length.contains(&c.as_str()) { 1e-3 } else { 1.0 };
-        let scale = m.history.iter().map(|r| r[k].abs()).fold(0.0, f64::max).max(1e-300);
+        let f = if length.contains(&c.as_str()) {
+            1e-3
+        } else {
+            1.0
+        };
+        let scale = m
+            .history
+            .iter()
+            .map(|r| r[k].abs())
+            .fold(0.0, f64::max)
+            .max(1e-300);
         let worst = m
             .history
             .iter()
@@ -62,7 +76,11 @@ fn cantilever_elastica_in_m_and_mm() {
             ("thickness = 0.1", "thickness = 100.0"),
         ],
     );
-    compare(&run(&m, "shear-m.toml"), &run(&mm, "shear-mm.toml"), &["ux_tip", "uz_tip"]);
+    compare(
+        &run(&m, "shear-m.toml"),
+        &run(&mm, "shear-mm.toml"),
+        &["ux_tip", "uz_tip"],
+    );
 }
 
 #[test]
@@ -80,5 +98,9 @@ fn propped_cantilever_on_a_plane_in_m_and_mm() {
             ("search_distance = 1.0", "search_distance = 1000.0"),
         ],
     );
-    compare(&run(&m, "propped-m.toml"), &run(&mm, "propped-mm.toml"), &["uz_tip"]);
+    compare(
+        &run(&m, "propped-m.toml"),
+        &run(&mm, "propped-mm.toml"),
+        &["uz_tip"],
+    );
 }

@@ -73,7 +73,12 @@ fn every_shell_and_friction_key_is_documented() {
     let docs = std::fs::read_to_string("docs/scenes.md").expect("docs/scenes.md");
     let shell = std::fs::read_to_string("tests/data/shell-every-table.toml").unwrap();
     let n_shell = check(
-        |p, _| format!("{}", anm::scene::shell::load(p).expect_err("injected key must fail")),
+        |p, _| {
+            format!(
+                "{}",
+                anm::scene::shell::load(p).expect_err("injected key must fail")
+            )
+        },
         &shell,
         &docs,
     );
@@ -83,8 +88,7 @@ fn every_shell_and_friction_key_is_documented() {
             format!(
                 "{}",
                 anm::scene::friction::load(p, t, Kind::FrictionRoller)
-                    .err()
-                    .expect("injected key must fail")
+                    .expect_err("injected key must fail")
             )
         },
         &friction,

@@ -85,7 +85,9 @@ fn mutate(rng: &mut Rng, doc: &mut Value) -> String {
         _ => {
             let v = get_mut(target, key);
             *v = match v.clone() {
-                Value::Float(x) if what == 2 => Value::Float(x * [-1.0, 0.0, 1e-12, 1e12][rng.below(4)]),
+                Value::Float(x) if what == 2 => {
+                    Value::Float(x * [-1.0, 0.0, 1e-12, 1e12][rng.below(4)])
+                }
                 Value::Array(mut a) if what == 3 && !a.is_empty() => {
                     let i = rng.below(a.len());
                     a[i] = odd[rng.below(odd.len())].clone();
@@ -95,7 +97,18 @@ fn mutate(rng: &mut Rng, doc: &mut Value) -> String {
             };
         }
     }
-    format!("{} ({})", path.join("."), ["removed", "extra key", "scaled", "array entry", "odd value", "odd value"][what])
+    format!(
+        "{} ({})",
+        path.join("."),
+        [
+            "removed",
+            "extra key",
+            "scaled",
+            "array entry",
+            "odd value",
+            "odd value"
+        ][what]
+    )
 }
 
 #[test]
@@ -104,8 +117,14 @@ fn mutated_scenes_give_errors_or_finite_results_never_panics() {
     let dir = std::env::temp_dir().join("anm-fuzz");
     std::fs::create_dir_all(&dir).unwrap();
     let bases = [
-        (format!("{root}/scenes/plate-cylinder-coarse.toml"), format!("{root}/meshes/plate-cylinder-20x2.msh")),
-        (format!("{root}/tests/data/shell-every-table.toml"), String::new()),
+        (
+            format!("{root}/scenes/plate-cylinder-coarse.toml"),
+            format!("{root}/meshes/plate-cylinder-20x2.msh"),
+        ),
+        (
+            format!("{root}/tests/data/shell-every-table.toml"),
+            String::new(),
+        ),
     ];
     let mut rng = Rng(0x9E37_79B9_7F4A_7C15);
     let (mut rejected, mut ran, mut stopped) = (0, 0, 0);
@@ -137,7 +156,15 @@ fn mutated_scenes_give_errors_or_finite_results_never_panics() {
             Ok(Err(e)) => {
                 let msg = e.to_string();
                 assert!(
-                    msg.contains(&format!("case{case}.toml")) || matches!(e, anm::Error::Mesh { .. } | anm::Error::SingularMatrix { .. } | anm::Error::NoConvergence { .. } | anm::Error::NonFinite { .. } | anm::Error::StepCollapse { .. }),
+                    msg.contains(&format!("case{case}.toml"))
+                        || matches!(
+                            e,
+                            anm::Error::Mesh { .. }
+                                | anm::Error::SingularMatrix { .. }
+                                | anm::Error::NoConvergence { .. }
+                                | anm::Error::NonFinite { .. }
+                                | anm::Error::StepCollapse { .. }
+                        ),
                     "case {case}: {what}: error does not name the scene: {msg}"
                 );
                 rejected += 1;
@@ -150,12 +177,20 @@ fn mutated_scenes_give_errors_or_finite_results_never_panics() {
                 if r.stop.reason == "end" || r.stop.reason == "max_steps" {
                     ran += 1;
                 } else {
-                    assert!(r.stop.message.is_some(), "case {case}: {what}: stop without diagnosis");
+                    assert!(
+                        r.stop.message.is_some(),
+                        "case {case}: {what}: stop without diagnosis"
+                    );
                     stopped += 1;
                 }
             }
         }
     }
-    println!("{cases} mutated scenes: {rejected} rejected, {ran} ran, {stopped} stopped with a diagnosis");
-    assert!(rejected > 50 && ran > 20, "the mutations must exercise both paths");
+    println!(
+        "{cases} mutated scenes: {rejected} rejected, {ran} ran, {stopped} stopped with a diagnosis"
+    );
+    assert!(
+        rejected > 50 && ran > 20,
+        "the mutations must exercise both paths"
+    );
 }

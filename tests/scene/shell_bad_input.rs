@@ -167,9 +167,24 @@ fn probe_on_a_point_that_is_not_a_node_is_rejected() {
 #[test]
 fn unknown_group_in_every_new_key_is_named() {
     for (name, old, new, key) in [
-        ("fix-group.toml", "group = \"clamp\"", "group = \"nope\"", "fix[0].group"),
-        ("probe-group.toml", "group = \"row_B\"", "group = \"nope\"", "probe[2].group"),
-        ("contact-group.toml", "group = \"strip\"", "group = \"nope\"", "contact.group"),
+        (
+            "fix-group.toml",
+            "group = \"clamp\"",
+            "group = \"nope\"",
+            "fix[0].group",
+        ),
+        (
+            "probe-group.toml",
+            "group = \"row_B\"",
+            "group = \"nope\"",
+            "probe[2].group",
+        ),
+        (
+            "contact-group.toml",
+            "group = \"strip\"",
+            "group = \"nope\"",
+            "contact.group",
+        ),
     ] {
         let s = scene(name, &mesh_path(), &[(old, new)]);
         expect_err(load(&s), &[name, key, "unknown group `nope`", "clamp, "]);
@@ -198,7 +213,13 @@ fn a_fix_that_leaves_a_rigid_motion_free_names_it() {
     std::fs::write(&s, text).unwrap();
     expect_err(
         load(&s).and_then(|sc| anm::run::build::build_model(&sc).map(|_| ())),
-        &["free.toml", "`fix`", "rigid body", "translation along", "rotation about"],
+        &[
+            "free.toml",
+            "`fix`",
+            "rigid body",
+            "translation along",
+            "rotation about",
+        ],
     );
 }
 
@@ -211,12 +232,32 @@ fn obstacle_motion_with_a_zero_axis_or_bad_keys_is_rejected() {
     );
     expect_err(load(&s), &["obstacle[0].axis", "non-zero"]);
     for (name, motion, needles) in [
-        ("motion-type.toml", "motion = { type = \"spin\" }", vec!["obstacle[0].motion.type", "unknown motion `spin`"]),
-        ("motion-vel.toml", "motion = { type = \"translate\" }", vec!["obstacle[0].motion.velocity", "missing"]),
-        ("motion-omega.toml", "motion = { type = \"rotate\", velocity = [1.0, 0.0, 0.0] }", vec!["obstacle[0].motion.velocity", "not used"]),
-        ("motion-nan.toml", "motion = { type = \"rotate\", omega = nan }", vec!["obstacle[0].motion.omega", "finite"]),
+        (
+            "motion-type.toml",
+            "motion = { type = \"spin\" }",
+            vec!["obstacle[0].motion.type", "unknown motion `spin`"],
+        ),
+        (
+            "motion-vel.toml",
+            "motion = { type = \"translate\" }",
+            vec!["obstacle[0].motion.velocity", "missing"],
+        ),
+        (
+            "motion-omega.toml",
+            "motion = { type = \"rotate\", velocity = [1.0, 0.0, 0.0] }",
+            vec!["obstacle[0].motion.velocity", "not used"],
+        ),
+        (
+            "motion-nan.toml",
+            "motion = { type = \"rotate\", omega = nan }",
+            vec!["obstacle[0].motion.omega", "finite"],
+        ),
     ] {
-        let s = scene(name, &mesh_path(), &[("radius = 0.5\n", &format!("radius = 0.5\n{motion}\n"))]);
+        let s = scene(
+            name,
+            &mesh_path(),
+            &[("radius = 0.5\n", &format!("radius = 0.5\n{motion}\n"))],
+        );
         expect_err(load(&s), &needles);
     }
 }
@@ -225,17 +266,44 @@ fn obstacle_motion_with_a_zero_axis_or_bad_keys_is_rejected() {
 fn a_load_on_the_wrong_kind_of_group_is_rejected() {
     for (name, load_text, needles) in [
         // `clamp` is a physical curve: edges, not elements.
-        ("pressure-edge.toml", "surface = \"clamp\"\npressure = 1.0", vec!["load[0].surface", "`clamp`"]),
-        ("line-on-point.toml", "point = [2.0, 0.0, 0.0]\nline_force = [0.0, 0.0, 1.0]", vec!["load[0]", "`edge`"]),
-        ("force-on-edge.toml", "edge = \"clamp\"\nforce = [0.0, 0.0, 1.0]", vec!["load[0]", "line_force"]),
-        ("two-loads.toml", "point = [2.0, 0.0, 0.0]\nforce = [0.0, 0.0, 1.0]\nmoment = [0.0, 1.0, 0.0]", vec!["load[0]", "exactly one"]),
-        ("follower-force.toml", "point = [2.0, 0.0, 0.0]\nforce = [0.0, 0.0, 1.0]\nfollower = true", vec!["load[0].follower", "pressure"]),
-        ("row-as-edge.toml", "edge = \"row_B\"\nline_force = [0.0, 0.0, 1.0]", vec!["load[0].edge", "not a group of edges"]),
+        (
+            "pressure-edge.toml",
+            "surface = \"clamp\"\npressure = 1.0",
+            vec!["load[0].surface", "`clamp`"],
+        ),
+        (
+            "line-on-point.toml",
+            "point = [2.0, 0.0, 0.0]\nline_force = [0.0, 0.0, 1.0]",
+            vec!["load[0]", "`edge`"],
+        ),
+        (
+            "force-on-edge.toml",
+            "edge = \"clamp\"\nforce = [0.0, 0.0, 1.0]",
+            vec!["load[0]", "line_force"],
+        ),
+        (
+            "two-loads.toml",
+            "point = [2.0, 0.0, 0.0]\nforce = [0.0, 0.0, 1.0]\nmoment = [0.0, 1.0, 0.0]",
+            vec!["load[0]", "exactly one"],
+        ),
+        (
+            "follower-force.toml",
+            "point = [2.0, 0.0, 0.0]\nforce = [0.0, 0.0, 1.0]\nfollower = true",
+            vec!["load[0].follower", "pressure"],
+        ),
+        (
+            "row-as-edge.toml",
+            "edge = \"row_B\"\nline_force = [0.0, 0.0, 1.0]",
+            vec!["load[0].edge", "not a group of edges"],
+        ),
     ] {
         let s = scene(
             name,
             &mesh_path(),
-            &[("point = [2.0, -0.1, 0.0]\nforce = [0.0, 0.0, 10.0]", load_text)],
+            &[(
+                "point = [2.0, -0.1, 0.0]\nforce = [0.0, 0.0, 10.0]",
+                load_text,
+            )],
         );
         expect_err(load(&s), &needles);
     }
@@ -244,17 +312,76 @@ fn a_load_on_the_wrong_kind_of_group_is_rejected() {
 #[test]
 fn fix_and_probe_key_errors_name_the_key() {
     for (name, old, new, needles) in [
-        ("fix-two.toml", "clamp = true", "clamp = true\nsymmetry = \"x\"", vec!["fix[0]", "exactly one"]),
-        ("fix-comp.toml", "clamp = true", "dofs = [\"uq\"]", vec!["fix[0].dofs[0]", "unknown component `uq`"]),
-        ("fix-sym.toml", "clamp = true", "symmetry = \"q\"", vec!["fix[0].symmetry", "\"x\""]),
-        ("fix-value.toml", "clamp = true", "dofs = [\"ux\", \"uy\"]\nvalue = [1.0]", vec!["fix[0].value", "1 entries for 2 dofs"]),
-        ("probe-qty.toml", "quantity = \"uz\"", "quantity = \"stress\"", vec!["probe[0].quantity", "unknown quantity `stress`"]),
-        ("probe-dup.toml", "name = \"ux_A\"", "name = \"uz_A\"", vec!["probe[1].name", "repeated"]),
-        ("probe-reaction.toml", "quantity = \"uz\"", "quantity = \"reaction_z\"", vec!["probe[0]", "a reaction needs fixed dofs"]),
-        ("probe-obstacle.toml", "quantity = \"contact_rn\"\ngroup = \"row_B\"", "quantity = \"contact_rn\"\nobstacle = \"roller\"", vec!["probe[2].obstacle", "no obstacle named `roller`", "cylinder"]),
-        ("solver-method.toml", "order = 15", "order = 15\nmethod = \"linear\"", vec!["solver.order", "not used by solver.method = \"linear\""]),
-        ("length-scale.toml", "order = 15", "order = 15\nlength_scale = -1.0", vec!["solver.length_scale", "> 0"]),
-        ("group-box.toml", "box = [[1.0, -1.0, -1.0], [1.0, 1.0, 1.0]]", "box = [[5.0, -1.0, -1.0], [6.0, 1.0, 1.0]]", vec!["group[0].box", "no node"]),
+        (
+            "fix-two.toml",
+            "clamp = true",
+            "clamp = true\nsymmetry = \"x\"",
+            vec!["fix[0]", "exactly one"],
+        ),
+        (
+            "fix-comp.toml",
+            "clamp = true",
+            "dofs = [\"uq\"]",
+            vec!["fix[0].dofs[0]", "unknown component `uq`"],
+        ),
+        (
+            "fix-sym.toml",
+            "clamp = true",
+            "symmetry = \"q\"",
+            vec!["fix[0].symmetry", "\"x\""],
+        ),
+        (
+            "fix-value.toml",
+            "clamp = true",
+            "dofs = [\"ux\", \"uy\"]\nvalue = [1.0]",
+            vec!["fix[0].value", "1 entries for 2 dofs"],
+        ),
+        (
+            "probe-qty.toml",
+            "quantity = \"uz\"",
+            "quantity = \"stress\"",
+            vec!["probe[0].quantity", "unknown quantity `stress`"],
+        ),
+        (
+            "probe-dup.toml",
+            "name = \"ux_A\"",
+            "name = \"uz_A\"",
+            vec!["probe[1].name", "repeated"],
+        ),
+        (
+            "probe-reaction.toml",
+            "quantity = \"uz\"",
+            "quantity = \"reaction_z\"",
+            vec!["probe[0]", "a reaction needs fixed dofs"],
+        ),
+        (
+            "probe-obstacle.toml",
+            "quantity = \"contact_rn\"\ngroup = \"row_B\"",
+            "quantity = \"contact_rn\"\nobstacle = \"roller\"",
+            vec![
+                "probe[2].obstacle",
+                "no obstacle named `roller`",
+                "cylinder",
+            ],
+        ),
+        (
+            "solver-method.toml",
+            "order = 15",
+            "order = 15\nmethod = \"linear\"",
+            vec!["solver.order", "not used by solver.method = \"linear\""],
+        ),
+        (
+            "length-scale.toml",
+            "order = 15",
+            "order = 15\nlength_scale = -1.0",
+            vec!["solver.length_scale", "> 0"],
+        ),
+        (
+            "group-box.toml",
+            "box = [[1.0, -1.0, -1.0], [1.0, 1.0, 1.0]]",
+            "box = [[5.0, -1.0, -1.0], [6.0, 1.0, 1.0]]",
+            vec!["group[0].box", "no node"],
+        ),
     ] {
         let s = scene(name, &mesh_path(), &[(old, new)]);
         expect_err(load(&s), &needles);

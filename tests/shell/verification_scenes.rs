@@ -8,7 +8,10 @@ use anm::run::{RunReport, run_loaded};
 use std::f64::consts::PI;
 
 fn run(name: &str) -> RunReport {
-    let path = format!("{}/scenes/verification/{name}.toml", env!("CARGO_MANIFEST_DIR"));
+    let path = format!(
+        "{}/scenes/verification/{name}.toml",
+        env!("CARGO_MANIFEST_DIR")
+    );
     let scene = anm::scene::shell::load(std::path::Path::new(&path))
         .unwrap_or_else(|e| panic!("{name}: {e}"));
     let r = run_loaded(&scene, None, false).unwrap_or_else(|e| panic!("{name}: {e}"));
@@ -19,14 +22,24 @@ fn run(name: &str) -> RunReport {
 #[track_caller]
 fn assert_rel(got: f64, want: f64, tol: f64, what: &str) {
     let err = (got - want).abs() / want.abs();
-    println!("{what}: {got:.6e} (reference {want:.6e}, relative error {err:.2e}, tolerance {tol:.0e})");
-    assert!(got.is_finite() && err <= tol, "{what}: {got:e} vs {want:e}: {err:.3e} > {tol:e}");
+    println!(
+        "{what}: {got:.6e} (reference {want:.6e}, relative error {err:.2e}, tolerance {tol:.0e})"
+    );
+    assert!(
+        got.is_finite() && err <= tol,
+        "{what}: {got:e} vs {want:e}: {err:.3e} > {tol:e}"
+    );
 }
 
 #[test]
 fn scordelis_lo_roof_scene() {
     let r = run("scordelis-lo");
-    assert_rel(-r.end["uz_free_edge_midspan"], 0.3024, 0.02, "Scordelis-Lo 32x32");
+    assert_rel(
+        -r.end["uz_free_edge_midspan"],
+        0.3024,
+        0.02,
+        "Scordelis-Lo 32x32",
+    );
 }
 
 #[test]
@@ -56,8 +69,15 @@ fn patch(name: &str, exact: impl Fn(f64, f64, &str) -> f64) {
             }
         }
     }
-    println!("{name}: max nodal error {:.3e} of max value {scale:.3e}", worst);
-    assert!(scale > 0.0 && worst / scale < 1e-8, "{name}: {:.3e}", worst / scale);
+    println!(
+        "{name}: max nodal error {:.3e} of max value {scale:.3e}",
+        worst
+    );
+    assert!(
+        scale > 0.0 && worst / scale < 1e-8,
+        "{name}: {:.3e}",
+        worst / scale
+    );
 }
 
 #[test]
@@ -104,7 +124,11 @@ fn cantilever_moment_scene_rolls_into_a_circle() {
 #[test]
 fn cantilever_shear_scene_matches_the_elastica() {
     let r = run("cantilever-shear");
-    let exact = [(0.25, 0.05643, 0.30172), (0.5, 0.16064, 0.49346), (1.0, 0.32894, 0.66996)];
+    let exact = [
+        (0.25, 0.05643, 0.30172),
+        (0.5, 0.16064, 0.49346),
+        (1.0, 0.32894, 0.66996),
+    ];
     for (lt, ue, we) in exact {
         let u = -r.value_at("ux_tip", lt).unwrap() / L;
         let w = r.value_at("uz_tip", lt).unwrap() / L;
@@ -118,13 +142,21 @@ fn propped_cantilever_scene() {
     let r = run("propped-cantilever");
     let ei = 2e9 * 0.1 * 0.01f64.powi(3) / 12.0;
     let want = 1.0 - 3.0 * ei * 1e-2;
-    println!("tip w = {:.6e} (gap 1e-2), {} steps", r.end["uz_tip"], r.steps);
+    println!(
+        "tip w = {:.6e} (gap 1e-2), {} steps",
+        r.end["uz_tip"], r.steps
+    );
     // Geometric nonlinearity, of relative size (g/L)^2 = 1e-4, is the
     // largest modelling difference from the closed form.
     assert_rel(r.end["R"], want, 1e-3, "plane reaction");
     // Global equilibrium: clamp reaction + plane reaction = applied load,
     // to the residual the run is held to (1e-6 |F| per step end).
-    assert_rel(r.end["reaction_z"] + r.end["R"], 1.0, 1e-5, "clamp + plane reactions");
+    assert_rel(
+        r.end["reaction_z"] + r.end["R"],
+        1.0,
+        1e-5,
+        "clamp + plane reactions",
+    );
 }
 
 /// The ring's radial stretch l at lambda = 1 from the closed forms (scene
@@ -142,13 +174,21 @@ fn ring_stretch(follower: bool, c: f64) -> f64 {
 
 #[test]
 fn ring_under_follower_and_dead_pressure_matches_the_membrane_closed_form() {
-    for (name, follower) in [("ring-pressure-follower", true), ("ring-pressure-dead", false)] {
+    for (name, follower) in [
+        ("ring-pressure-follower", true),
+        ("ring-pressure-dead", false),
+    ] {
         let r = run(name);
         for k in 1..=10 {
             let lambda = 0.1 * k as f64;
             let want = ring_stretch(follower, 0.2 * lambda) - 1.0;
             let got = r.value_at("u_r", lambda).unwrap();
-            assert_rel(got, want, 2e-3, &format!("{name}: u_r/R at lambda = {lambda:.1}"));
+            assert_rel(
+                got,
+                want,
+                2e-3,
+                &format!("{name}: u_r/R at lambda = {lambda:.1}"),
+            );
         }
         println!("{name}: {} steps", r.steps);
     }
