@@ -289,3 +289,37 @@ pub(crate) fn factorize(
     charge(&mut stats.factorization_s, t);
     Ok(f)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A step whose lambda(a) = a - a^2 turns back at a = 0.5 (a limit
+    /// point): lambda = 0.21 is met twice, at a = 0.3 and 0.7.
+    #[test]
+    fn every_crossing_of_a_lambda_is_found_on_a_step_that_turns_back() {
+        let step = PathStep {
+            index: 0,
+            u: vec![vec![0.0], vec![1.0], vec![0.0]],
+            lambda: vec![0.0, 1.0, -1.0],
+            length: 1.0,
+            a_poly: 1.0,
+            pade: None,
+            geometric: None,
+            end_residual: 0.0,
+            u_end: vec![1.0],
+            lambda_end: 0.0,
+        };
+        assert!(!step.lambda_is_monotone());
+        let a = step.a_at_lambda_all(0.21);
+        assert_eq!(a.len(), 2, "{a:?}");
+        assert!((a[0] - 0.3).abs() < 1e-12 && (a[1] - 0.7).abs() < 1e-12, "{a:?}");
+        assert!(step.a_at_lambda_all(0.3).is_empty());
+        let mono = PathStep {
+            lambda: vec![0.0, 1.0, 0.0],
+            ..step.clone()
+        };
+        assert!(mono.lambda_is_monotone());
+        assert_eq!(mono.a_at_lambda_all(0.25).len(), 1);
+    }
+}
