@@ -462,8 +462,8 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
             resume,
             quiet,
         } => {
-            anm::run::interrupt::install();
             if let Some(dir) = resume {
+                anm::run::interrupt::install();
                 let report = anm::run::shell::resume(&dir, !quiet)
                     .with_context(|| format!("resuming the run in {}", dir.display()))?;
                 return Ok(shell_summary(&report, &dir));
@@ -474,6 +474,9 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
             let (kind, friction) = load(&scene)?;
             match kind {
                 Kind::Shell => {
+                    // Ctrl-C / SIGTERM end a shell run at the next step end
+                    // (friction runs keep the default: they stop at once).
+                    anm::run::interrupt::install();
                     let report = anm::run::run_scene(&scene, &out, !quiet)
                         .with_context(|| format!("running {}", scene.display()))?;
                     Ok(shell_summary(&report, &out))

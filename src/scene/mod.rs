@@ -64,8 +64,13 @@ pub fn kind(path: &Path, text: &str) -> Result<Kind> {
         .map(|(_, k)| *k)
         .ok_or_else(|| {
             let known: Vec<&str> = Kind::ALL.iter().map(|(n, _)| *n).collect();
+            let hint = if name == "plate-cylinder" {
+                "; plate-cylinder is now a `shell` scene with [[fix]] and [[probe]] tables: see scenes/plate-cylinder.toml and docs/scenes.md"
+            } else {
+                ""
+            };
             invalid(format!(
-                "unknown kind `{name}` (known: {})",
+                "unknown kind `{name}` (known: {}){hint}",
                 known.join(", ")
             ))
         })

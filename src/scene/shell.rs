@@ -488,10 +488,18 @@ pub fn load(path: &Path) -> Result<ShellScene> {
     }
     let fixed = fixes(&ctx, &raw.fix)?;
     let loads = loads(&ctx, &raw.load)?;
-    if loads.is_empty() && fixed.values().all(|v| *v == 0.0) {
+    let driven = !loads.is_empty()
+        || fixed.values().any(|v| *v != 0.0)
+        || (raw.contact.is_some()
+            && raw.obstacle.iter().any(|o| {
+                o.motion.as_ref().is_some_and(|m| {
+                    m.kind == "translate" && m.velocity.is_some_and(|v| v.iter().any(|x| *x != 0.0))
+                })
+            }));
+    if !driven {
         return Err(c.fail(
             "load",
-            "missing: at least one [[load]] or a [[fix]] with a non-zero `value` (both are scaled by lambda)",
+            "missing: nothing drives the path: give a [[load]], a [[fix]] with a non-zero `value`, or a translating [[obstacle]] with [contact] (all scaled by lambda)",
         ));
     }
     let obstacles = obstacles(&ctx, &raw.obstacle)?;

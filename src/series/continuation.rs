@@ -313,7 +313,10 @@ mod tests {
         assert!(!step.lambda_is_monotone());
         let a = step.a_at_lambda_all(0.21);
         assert_eq!(a.len(), 2, "{a:?}");
-        assert!((a[0] - 0.3).abs() < 1e-12 && (a[1] - 0.7).abs() < 1e-12, "{a:?}");
+        assert!(
+            (a[0] - 0.3).abs() < 1e-12 && (a[1] - 0.7).abs() < 1e-12,
+            "{a:?}"
+        );
         assert!(step.a_at_lambda_all(0.3).is_empty());
         let mono = PathStep {
             lambda: vec![0.0, 1.0, 0.0],

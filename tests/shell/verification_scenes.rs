@@ -193,3 +193,43 @@ fn ring_under_follower_and_dead_pressure_matches_the_membrane_closed_form() {
         println!("{name}: {} steps", r.steps);
     }
 }
+
+#[test]
+fn cantilever_pushed_onto_a_moving_plane() {
+    let r = run("moving-plane");
+    println!("{} steps", r.steps);
+    for k in 1..=10 {
+        let lambda = 0.1 * k as f64;
+        let (w, force) = if lambda < 1.0 / 3.0 {
+            (-0.02 * lambda, 0.0)
+        } else {
+            (-5e-3 * (1.0 + lambda), 0.75 * lambda - 0.25)
+        };
+        assert_rel(
+            r.value_at("uz_tip", lambda).unwrap(),
+            w,
+            1e-3,
+            &format!("tip at lambda = {lambda:.1}"),
+        );
+        let got = r.value_at("R", lambda).unwrap();
+        if force == 0.0 {
+            // Before contact: the regularization's push of eq. (3) on the two
+            // tip nodes, R = 2 eta (delta - h) / h (R / K negligible).
+            let h = r.value_at("min_gap", lambda).unwrap();
+            let want = 2.0 * 1e-6 * (5e-3 - h) / h;
+            assert_rel(
+                got,
+                want,
+                1e-6,
+                &format!("regularized push at lambda = {lambda:.1}"),
+            );
+        } else {
+            assert_rel(
+                got,
+                force,
+                2e-3,
+                &format!("plane force at lambda = {lambda:.1}"),
+            );
+        }
+    }
+}
