@@ -7,7 +7,6 @@
 //! [`friction_plane`], [`friction_roller`]); [`output`] writes what
 //! `anm reference ida` produces.
 
-pub mod bench;
 pub mod dae;
 pub mod error;
 pub mod friction_1d;
@@ -18,6 +17,5 @@ pub mod laws;
 pub mod output;
 pub mod run;
 
-pub use bench::bench_solution;
 pub use error::IdaError;
 pub use run::{IdaRun, solve};
