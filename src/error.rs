@@ -82,8 +82,8 @@ pub enum Error {
     /// An output folder cannot be resumed from.
     #[error("{file}: cannot resume: {problem}")]
     Resume { file: PathBuf, problem: String },
-    #[error("lambda = {lambda:.9e}: interrupted (Ctrl-C or SIGTERM)")]
-    Interrupted { lambda: f64 },
+    #[error("{param} = {at:.9e}: interrupted (Ctrl-C or SIGTERM)")]
+    Interrupted { param: &'static str, at: f64 },
     #[error(
         "{param} = {at:.9e}: contact node {node} came to {gap:.3e} m of obstacle {obstacle} within one step while outside the search distance {distance:.3e} m (increase contact.search_distance)"
     )]

@@ -474,8 +474,7 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
             let (kind, friction) = load(&scene)?;
             match kind {
                 Kind::Shell => {
-                    // Ctrl-C / SIGTERM end a shell run at the next step end
-                    // (friction runs keep the default: they stop at once).
+                    // Ctrl-C / SIGTERM end a shell run at the next step end.
                     anm::run::interrupt::install();
                     let report = anm::run::run_scene(&scene, &out, !quiet)
                         .with_context(|| format!("running {}", scene.display()))?;
@@ -483,6 +482,9 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
                 }
                 _ => {
                     let sc = friction.expect("friction kinds parse into a friction scene");
+                    // Ctrl-C / SIGTERM end the run at the next step end,
+                    // with history.csv and steps.csv holding every step.
+                    anm::run::interrupt::install();
                     let run = anm::model::friction_run::run(&sc, Some(&out), !quiet)
                         .with_context(|| format!("running {}", scene.display()))?;
                     println!(
@@ -502,6 +504,7 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
                     // A stop on an error is a failure; a detected singularity is a result.
                     Ok(match run.stop.reason.as_str() {
                         "end" | "singularity" => ExitCode::SUCCESS,
+                        "interrupted" => ExitCode::from(130),
                         _ => ExitCode::from(2),
                     })
                 }

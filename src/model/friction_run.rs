@@ -5,7 +5,7 @@
 use super::friction::{FrictionModel, build};
 use crate::error::Result;
 use crate::output::plot::{Curve, Panel, draw};
-use crate::output::{Stop, create_dir, write_csv, write_json};
+use crate::output::{CsvStream, Stop, create_dir, write_json};
 use crate::scene::friction::{FrictionScene, InitMode};
 use crate::series::dae::{self, DaeConfig, Initialization};
 use crate::series::{Stats, taylor};
@@ -78,11 +78,26 @@ pub fn run(scene: &FrictionScene, out_dir: Option<&Path>, progress: bool) -> Res
     let mut steps = Vec::new();
     let mut series = Vec::new();
     let bar = progress_bar(progress, scene.t_end);
+    // history.csv and steps.csv are streamed: a stopped run keeps its rows.
+    let mut streams = match out_dir {
+        Some(dir) => {
+            create_dir(dir)?;
+            Some((
+                CsvStream::create(&dir.join("history.csv"), model.columns())?,
+                CsvStream::create(&dir.join("steps.csv"), &step_columns(model))?,
+            ))
+        }
+        None => None,
+    };
     let result = dae::run(model, &model.u0(), &init, &cfg, |step, stats| {
         let t1 = step.t0 + step.length;
         while next < grid.len() && grid[next] <= t1 + 1e-12 * scene.t_end {
             let tg = grid[next];
-            history.push(model.row(tg, &step.eval(tg), &derivative(&step, tg)));
+            let row = model.row(tg, &step.eval(tg), &derivative(&step, tg));
+            if let Some((h, _)) = &mut streams {
+                h.row(&row)?;
+            }
+            history.push(row);
             next += 1;
         }
         let y = step.eval(t1);
@@ -100,6 +115,9 @@ pub fn run(scene: &FrictionScene, out_dir: Option<&Path>, progress: bool) -> Res
                 .into_iter()
                 .skip(1),
         );
+        if let Some((_, s)) = &mut streams {
+            s.row(&row)?;
+        }
         steps.push(row);
         if let Some(b) = &bar {
             b.set_position((1000.0 * t1 / scene.t_end) as u64);
@@ -109,6 +127,10 @@ pub fn run(scene: &FrictionScene, out_dir: Option<&Path>, progress: bool) -> Res
             ));
         }
         series.push(step);
+        // Ctrl-C or SIGTERM: stop at this step end (no resume for the DAE).
+        if crate::run::interrupt::requested() {
+            return Err(crate::Error::Interrupted { param: "t", at: t1 });
+        }
         Ok(())
     });
     if let Some(b) = &bar {
@@ -211,16 +233,9 @@ fn progress_bar(show: bool, t_end: f64) -> Option<indicatif::ProgressBar> {
     Some(bar)
 }
 
-fn write_outputs(
-    run: &FrictionRun,
-    model: &dyn FrictionModel,
-    scene: &FrictionScene,
-    dir: &Path,
-) -> Result<()> {
-    create_dir(dir)?;
-    let cols = model.columns();
-    write_csv(&dir.join("history.csv"), cols, &run.history)?;
-    let mut step_cols = vec![
+/// Columns of steps.csv.
+fn step_columns(model: &dyn FrictionModel) -> Vec<&'static str> {
+    let mut cols = vec![
         "step",
         "t",
         "h",
@@ -228,10 +243,20 @@ fn write_outputs(
         "slip",
         "geometric_distance",
     ];
-    step_cols.extend(cols.iter().skip(1));
-    write_csv(&dir.join("steps.csv"), &step_cols, &run.steps)?;
+    cols.extend(model.columns().iter().skip(1));
+    cols
+}
+
+/// summary.json and the plot (history.csv and steps.csv are streamed).
+fn write_outputs(
+    run: &FrictionRun,
+    model: &dyn FrictionModel,
+    scene: &FrictionScene,
+    dir: &Path,
+) -> Result<()> {
+    let cols = model.columns();
     write_json(&dir.join("summary.json"), &Summary::from(run))?;
-    if scene.plot && !run.history.is_empty() {
+    if scene.plot && !run.history.is_empty() && run.stop.reason != "interrupted" {
         plot(run, cols, &dir.join("history.svg"))?;
     }
     Ok(())

@@ -31,6 +31,48 @@ pub fn write_csv(path: &Path, header: &[&str], rows: &[Vec<f64>]) -> Result<()> 
     w.flush().map_err(|e| Error::write(path, e))
 }
 
+/// A CSV file written row by row and flushed after each row, so that a run
+/// stopped at any point leaves every row it computed.
+pub struct CsvStream {
+    path: std::path::PathBuf,
+    writer: csv::Writer<std::fs::File>,
+    header: Vec<String>,
+}
+
+impl CsvStream {
+    /// Creates the file with its header row.
+    pub fn create(path: &Path, header: &[&str]) -> Result<Self> {
+        let mut writer = csv::Writer::from_path(path).map_err(|e| Error::write(path, e))?;
+        writer
+            .write_record(header)
+            .and_then(|_| writer.flush().map_err(csv::Error::from))
+            .map_err(|e| Error::write(path, e))?;
+        Ok(Self {
+            path: path.to_path_buf(),
+            writer,
+            header: header.iter().map(|s| s.to_string()).collect(),
+        })
+    }
+
+    /// Appends a row in full precision; a non-finite value is refused.
+    pub fn row(&mut self, row: &[f64]) -> Result<()> {
+        if let Some(bad) = row.iter().position(|x| !x.is_finite()) {
+            return Err(Error::write(
+                &self.path,
+                format!(
+                    "refusing to write non-finite `{}` = {}",
+                    self.header.get(bad).map_or("?", |s| s.as_str()),
+                    row[bad]
+                ),
+            ));
+        }
+        self.writer
+            .write_record(row.iter().map(|x| format!("{x:.17e}")))
+            .and_then(|_| self.writer.flush().map_err(csv::Error::from))
+            .map_err(|e| Error::write(&self.path, e))
+    }
+}
+
 /// Writes any serializable value as pretty JSON.
 pub fn write_json<T: Serialize>(path: &Path, value: &T) -> Result<()> {
     let text = serde_json::to_string_pretty(value).map_err(|e| Error::write(path, e))?;

@@ -415,7 +415,10 @@ fn run_inner(
                 &grid,
                 |u, lambda, stats| {
                     if interrupt::requested() {
-                        return Err(Error::Interrupted { lambda });
+                        return Err(Error::Interrupted {
+                            param: "lambda",
+                            at: lambda,
+                        });
                     }
                     let du: Vec<f64> = u.iter().zip(&prev.0).map(|(a, b)| a - b).collect();
                     rec.state.arclength += chord(m, &du, lambda - prev.1, ncfg.lambda_end.abs());
@@ -449,7 +452,9 @@ fn run_inner(
                 },
             );
             let stop = match result.stop {
-                PathStop::Failed(Error::Interrupted { lambda }) => PathStop::Interrupted { lambda },
+                PathStop::Failed(Error::Interrupted { at, .. }) => {
+                    PathStop::Interrupted { lambda: at }
+                }
                 other => other,
             };
             (stop, result.stats, (result.u_end, result.lambda_end))

@@ -117,7 +117,7 @@ pub fn clone_error(e: &Error) -> Error {
             element: *element,
             problem: problem.clone(),
         },
-        Error::Interrupted { lambda } => Error::Interrupted { lambda: *lambda },
+        Error::Interrupted { param, at } => Error::Interrupted { param, at: *at },
         Error::SingularMatrix {
             step,
             param,
