@@ -93,6 +93,13 @@ impl fmt::Display for Dof {
     }
 }
 
+/// Index in the full vector of a node's component by its offset (0..6:
+/// ux, uy, uz, wx, wy, wz), for loops over components.
+pub fn index(node: usize, offset: usize) -> usize {
+    debug_assert!(offset < PER_NODE);
+    PER_NODE * node + offset
+}
+
 /// The 3-vector of a node's displacement (`Component::DISPLACEMENT`) or
 /// director difference (`Component::DIRECTOR`) in a full vector.
 pub fn node_vector(full: &[f64], node: usize, comps: [Component; 3]) -> [f64; 3] {

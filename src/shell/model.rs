@@ -40,6 +40,7 @@ use crate::contact::Motion;
 use crate::contact::obstacle::{GapSeries, Obstacle};
 use crate::contact::search::{self, ContactPair};
 use crate::error::{Error, Result};
+use crate::fe::dof::{Dof, PER_NODE, index as dof};
 use crate::fe::surface_load;
 use crate::linalg::SparseMatrix;
 use crate::series::ContinuationProblem;
@@ -126,10 +127,10 @@ impl ShellModel {
             x0,
             a30,
             elements,
-            free: vec![None; 6 * n],
+            free: vec![None; PER_NODE * n],
             ndof: 0,
-            dead: vec![0.0; 6 * n],
-            prescribed: vec![0.0; 6 * n],
+            dead: vec![0.0; PER_NODE * n],
+            prescribed: vec![0.0; PER_NODE * n],
             follower: vec![],
             pressures: vec![],
             obstacles: vec![],
@@ -151,7 +152,7 @@ impl ShellModel {
     pub fn set_constraints(&mut self, fixed: &[(usize, usize)]) {
         let mut is_fixed = vec![false; self.free.len()];
         for &(node, k) in fixed {
-            is_fixed[6 * node + k] = true;
+            is_fixed[dof(node, k)] = true;
         }
         let mut next = 0;
         for (i, f) in self.free.iter_mut().enumerate() {
@@ -200,7 +201,11 @@ impl ShellModel {
         let mut s = vec![0.0; self.ndof];
         for (i, f) in self.free.iter().enumerate() {
             if let Some(k) = f {
-                s[*k] = if i % 6 < 3 { self.length_scale } else { 1.0 };
+                s[*k] = if Dof::of_index(i).component.is_displacement() {
+                    self.length_scale
+                } else {
+                    1.0
+                };
             }
         }
         s
@@ -244,26 +249,26 @@ impl ShellModel {
     /// Current mid-surface positions from a full vector.
     pub fn positions(&self, full: &[f64]) -> Vec<Vec3> {
         (0..self.n_nodes())
-            .map(|i| self.x0[i] + Vec3::new(full[6 * i], full[6 * i + 1], full[6 * i + 2]))
+            .map(|i| self.x0[i] + Self::vec3(full, i, 0))
             .collect()
     }
 
     /// Current directors from a full vector.
     pub fn directors(&self, full: &[f64]) -> Vec<Vec3> {
         (0..self.n_nodes())
-            .map(|i| self.a30[i] + Vec3::new(full[6 * i + 3], full[6 * i + 4], full[6 * i + 5]))
+            .map(|i| self.a30[i] + Self::vec3(full, i, 3))
             .collect()
     }
 
     fn element_state(&self, e: &ShellElement, full: &[f64], incr: bool) -> ([Vec3; 4], [Vec3; 4]) {
         let x = std::array::from_fn(|i| {
             let n = e.nodes[i];
-            let v = Vec3::new(full[6 * n], full[6 * n + 1], full[6 * n + 2]);
+            let v = Self::vec3(full, n, 0);
             if incr { v } else { self.x0[n] + v }
         });
         let d = std::array::from_fn(|i| {
             let n = e.nodes[i];
-            let w = Vec3::new(full[6 * n + 3], full[6 * n + 4], full[6 * n + 5]);
+            let w = Self::vec3(full, n, 3);
             if incr { w } else { self.a30[n] + w }
         });
         (x, d)
@@ -271,9 +276,9 @@ impl ShellModel {
 
     fn vec3(full: &[f64], node: usize, off: usize) -> Vec3 {
         Vec3::new(
-            full[6 * node + off],
-            full[6 * node + off + 1],
-            full[6 * node + off + 2],
+            full[dof(node, off)],
+            full[dof(node, off + 1)],
+            full[dof(node, off + 2)],
         )
     }
 
@@ -315,7 +320,7 @@ impl ShellModel {
             let f = e.internal(&x, &d);
             for (i, &n) in e.nodes.iter().enumerate() {
                 for k in 0..6 {
-                    r[6 * n + k] += f[6 * i + k];
+                    r[dof(n, k)] += f[6 * i + k];
                 }
             }
         }
@@ -326,20 +331,20 @@ impl ShellModel {
             let a3 = self.a30[c.node] + Self::vec3(full, c.node, 3);
             let fw = c.moment.cross(&a3) * lambda;
             for k in 0..3 {
-                r[6 * c.node + 3 + k] -= fw[k];
+                r[dof(c.node, 3 + k)] -= fw[k];
             }
         }
         for pr in &self.pressures {
             let f = surface_load::follower_forces(pr.pressure, &self.pressure_x(pr, full, true));
             for (i, &n) in pr.nodes.iter().enumerate() {
                 for k in 0..3 {
-                    r[6 * n + k] -= lambda * f[i][k];
+                    r[dof(n, k)] -= lambda * f[i][k];
                 }
             }
         }
         for c in self.contact_forces(full, lambda)? {
             for k in 0..3 {
-                r[6 * c.node + k] -= c.r * c.normal[k];
+                r[dof(c.node, k)] -= c.r * c.normal[k];
             }
         }
         Ok(r)
@@ -360,7 +365,7 @@ impl ShellModel {
                 step: 0,
                 param: "lambda",
                 at: lambda,
-                what: format!("{what} (entry {i}: node {}, dof {})", i / 6, i % 6),
+                what: format!("{what} (entry {i}: {})", Dof::of_index(i)),
             });
         }
         Ok(())
@@ -505,9 +510,9 @@ impl ContinuationProblem for ShellModel {
         for (e, st) in self.elements.iter().zip(&self.el_series) {
             let ke = st.tangent();
             for a in 0..24 {
-                let ga = 6 * e.nodes[a / 6] + a % 6;
+                let ga = dof(e.nodes[a / 6], a % 6);
                 for b in 0..24 {
-                    let gb = 6 * e.nodes[b / 6] + b % 6;
+                    let gb = dof(e.nodes[b / 6], b % 6);
                     add(&self.free, &mut rl, ga, gb, ke[(a, b)]);
                 }
             }
@@ -519,13 +524,13 @@ impl ContinuationProblem for ShellModel {
             // d(-λ m × w)/dw = -λ [m]×.
             let mx = [[0.0, -m[2], m[1]], [m[2], 0.0, -m[0]], [-m[1], m[0], 0.0]];
             for i in 0..3 {
-                rl[6 * c.node + 3 + i] -= fw[i];
+                rl[dof(c.node, 3 + i)] -= fw[i];
                 for j in 0..3 {
                     add(
                         &self.free,
                         &mut rl,
-                        6 * c.node + 3 + i,
-                        6 * c.node + 3 + j,
+                        dof(c.node, 3 + i),
+                        dof(c.node, 3 + j),
                         -lambda * mx[i][j],
                     );
                 }
@@ -536,10 +541,10 @@ impl ContinuationProblem for ShellModel {
             let f = surface_load::follower_forces(pr.pressure, &x);
             let kf = surface_load::follower_stiffness(pr.pressure, &x);
             for a in 0..12 {
-                let ga = 6 * pr.nodes[a / 3] + a % 3;
+                let ga = dof(pr.nodes[a / 3], a % 3);
                 rl[ga] -= f[a / 3][a % 3];
                 for b in 0..12 {
-                    let gb = 6 * pr.nodes[b / 3] + b % 3;
+                    let gb = dof(pr.nodes[b / 3], b % 3);
                     add(&self.free, &mut rl, ga, gb, -lambda * kf[a][b]);
                 }
             }
@@ -558,8 +563,8 @@ impl ContinuationProblem for ShellModel {
             for i in 0..3 {
                 for j in 0..3 {
                     let v = -(dr * g.n[i] * g.n[j] + r * g.dn[(i, j)]);
-                    add(&self.free, &mut rl, 6 * pair.node + i, 6 * pair.node + j, v);
-                    rl[6 * pair.node + i] -= v * vel[j];
+                    add(&self.free, &mut rl, dof(pair.node, i), dof(pair.node, j), v);
+                    rl[dof(pair.node, i)] -= v * vel[j];
                 }
             }
         }
@@ -573,12 +578,7 @@ impl ContinuationProblem for ShellModel {
                 step: 0,
                 param: "lambda",
                 at: lambda,
-                what: format!(
-                    "tangent matrix (entry {}: node {}, dof {})",
-                    t.row,
-                    i / 6 + 1,
-                    i % 6
-                ),
+                what: format!("tangent matrix (entry {}: {})", t.row, Dof::of_index(i)),
             });
         }
         Ok((k, self.reduce(&rl)))
@@ -598,7 +598,7 @@ impl ContinuationProblem for ShellModel {
             let f = st.rhs(e);
             for (i, &n) in e.nodes.iter().enumerate() {
                 for k in 0..6 {
-                    rhs[6 * n + k] += f[6 * i + k];
+                    rhs[dof(n, k)] += f[6 * i + k];
                 }
             }
         }
@@ -610,7 +610,7 @@ impl ContinuationProblem for ShellModel {
                     s += c.moment.cross(&Self::vec3(&fulls[p - r - 1], c.node, 3)) * lambda[r];
                 }
                 for k in 0..3 {
-                    rhs[6 * c.node + 3 + k] -= s[k];
+                    rhs[dof(c.node, 3 + k)] -= s[k];
                 }
             }
         }
@@ -643,7 +643,7 @@ impl ContinuationProblem for ShellModel {
                 }
                 for (i, &n) in pr.nodes.iter().enumerate() {
                     for k in 0..3 {
-                        rhs[6 * n + k] -= total[i][k];
+                        rhs[dof(n, k)] -= total[i][k];
                     }
                 }
             }
@@ -661,7 +661,7 @@ impl ContinuationProblem for ShellModel {
                 f += ps.gap.normal(p - q) * ps.r[q];
             }
             for k in 0..3 {
-                rhs[6 * pair.node + k] -= f[k];
+                rhs[dof(pair.node, k)] -= f[k];
             }
         }
         Self::check_finite(&rhs, lambda[0], "series right-hand side")?;
