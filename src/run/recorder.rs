@@ -13,7 +13,7 @@ use crate::scene::shell::ShellScene;
 use crate::shell::ShellModel;
 use serde::{Deserialize, Serialize};
 use std::fs::{File, OpenOptions};
-use std::io::{BufRead, BufReader, Write};
+use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
 
 /// The mid-surface at one lambda: per node, reference position,
@@ -76,12 +76,14 @@ const STEP_COLUMNS: [&str; 9] = [
     "solves",
 ];
 
-/// What the recorder keeps between steps: written into the checkpoint.
+/// What the recorder keeps between steps: written into the checkpoint. The
+/// history rows themselves are not: history.csv holds them (in full
+/// precision), and a resume reads them back.
 #[derive(Clone, Debug, Default, Serialize, Deserialize)]
 pub struct RecorderState {
-    /// Index k of the last grid value k·Δ recorded (None: nothing yet).
-    pub last_grid: Option<i64>,
+    #[serde(skip)]
     pub history: Vec<Vec<f64>>,
+    pub history_rows: usize,
     pub steps_rows: usize,
     pub pvd: Vec<(f64, usize, String)>,
     pub snapshots: Vec<Snapshot>,
@@ -115,8 +117,12 @@ fn csv_err(file: &Path) -> impl Fn(csv::Error) -> Error + '_ {
 }
 
 /// Opens a streamed CSV: new with its header, or (resume) cut back to its
-/// header and first `keep` rows and appended to.
-fn open_csv(path: &Path, header: &[String], keep: Option<usize>) -> Result<csv::Writer<File>> {
+/// header and first `keep` rows, which are returned, and appended to.
+fn open_csv(
+    path: &Path,
+    header: &[String],
+    keep: Option<usize>,
+) -> Result<(csv::Writer<File>, Vec<String>)> {
     if let Some(keep) = keep {
         let f = File::open(path).map_err(io_err(path))?;
         let lines: Vec<String> = BufReader::new(f)
@@ -141,12 +147,12 @@ fn open_csv(path: &Path, header: &[String], keep: Option<usize>) -> Result<csv::
             .append(true)
             .open(path)
             .map_err(io_err(path))?;
-        Ok(csv::Writer::from_writer(f))
+        Ok((csv::Writer::from_writer(f), lines[1..].to_vec()))
     } else {
         let mut w = csv::Writer::from_path(path).map_err(csv_err(path))?;
         w.write_record(header).map_err(csv_err(path))?;
         w.flush().map_err(io_err(path))?;
-        Ok(w)
+        Ok((w, vec![]))
     }
 }
 
@@ -160,23 +166,32 @@ impl<'s> Recorder<'s> {
     ) -> Result<Self> {
         let mut columns = vec!["lambda".to_string()];
         columns.extend(scene.probes.iter().map(|p| p.name.clone()));
+        let mut state = resumed.unwrap_or_default();
         let (history, steps) = match dir {
             Some(d) => {
                 crate::output::create_dir(d)?;
-                let keep = resumed.as_ref().map(|s| (s.history.len(), s.steps_rows));
+                let resuming = state.history_rows + state.steps_rows > 0;
                 let step_header: Vec<String> = STEP_COLUMNS.iter().map(|s| s.to_string()).collect();
-                (
-                    Some(open_csv(
-                        &d.join("history.csv"),
-                        &columns,
-                        keep.map(|k| k.0),
-                    )?),
-                    Some(open_csv(
-                        &d.join("steps.csv"),
-                        &step_header,
-                        keep.map(|k| k.1),
-                    )?),
-                )
+                let path = d.join("history.csv");
+                let (h, rows) = open_csv(&path, &columns, resuming.then_some(state.history_rows))?;
+                state.history = rows
+                    .iter()
+                    .map(|l| {
+                        l.split(',')
+                            .map(str::parse)
+                            .collect::<std::result::Result<_, _>>()
+                    })
+                    .collect::<std::result::Result<_, _>>()
+                    .map_err(|e| Error::Resume {
+                        file: path.clone(),
+                        problem: format!("unreadable row: {e}"),
+                    })?;
+                let (s, _) = open_csv(
+                    &d.join("steps.csv"),
+                    &step_header,
+                    resuming.then_some(state.steps_rows),
+                )?;
+                (Some(h), Some(s))
             }
             None => (None, None),
         };
@@ -184,7 +199,7 @@ impl<'s> Recorder<'s> {
             scene,
             dir: dir.map(Path::to_path_buf),
             columns,
-            state: resumed.unwrap_or_default(),
+            state,
             history,
             steps,
         })
@@ -245,6 +260,7 @@ impl<'s> Recorder<'s> {
                 })?;
         }
         self.state.history.push(row);
+        self.state.history_rows += 1;
         if self
             .scene
             .output
@@ -322,9 +338,9 @@ impl<'s> Recorder<'s> {
         let Some(d) = &self.dir else { return Ok(()) };
         let tmp = d.join("checkpoint.json.tmp");
         let text = serde_json::to_string(value).map_err(|e| Error::write(&tmp, e))?;
-        let mut f = File::create(&tmp).map_err(io_err(&tmp))?;
-        f.write_all(text.as_bytes()).map_err(io_err(&tmp))?;
-        f.sync_all().map_err(io_err(&tmp))?;
+        // Renamed into place: a process stopped at any point leaves the old
+        // or the new checkpoint, never half of one.
+        std::fs::write(&tmp, text).map_err(io_err(&tmp))?;
         let path = d.join("checkpoint.json");
         std::fs::rename(&tmp, &path).map_err(io_err(&path))
     }

@@ -5,7 +5,7 @@
 //! every `output.vtk_every` steps, a checkpoint. Ctrl-C or SIGTERM ends the
 //! run at the next step end; `--resume` continues from the checkpoint.
 
-use super::build::{build_model, far_nodes_may_be_skipped};
+use super::build::build_model;
 use super::interrupt;
 use super::probe::State;
 pub use super::recorder::Snapshot;
@@ -268,6 +268,8 @@ fn run_inner(
     };
     let fresh = rec_state.is_none();
     let mut rec = Recorder::new(scene, out_dir, rec_state)?;
+    // Wall time spent before a resume (0 for a fresh run).
+    let wall_before = rec.state.wall_s_before;
     let scene_file = std::fs::canonicalize(&scene.file).unwrap_or(scene.file.clone());
     let scene_text = crate::scene::read(&scene.file)?;
     let bar = progress_bar(progress);
@@ -292,7 +294,6 @@ fn run_inner(
                 arclength: 0.0,
             },
         )?;
-        rec.state.last_grid = Some(0);
         rec.vtk(&model, &full0, 0.0, "shell_0000.vtu")?;
     }
     let mut grid_lu = SparseLu::new();
@@ -384,7 +385,7 @@ fn run_inner(
                         &format!("shell_{:04}.vtu", step.index + 1),
                     )?;
                 }
-                rec.state.wall_s_before = 0.0;
+                rec.state.wall_s_before = wall_before + start.elapsed().as_secs_f64();
                 rec.checkpoint(&RunCheckpointRef {
                     scene_file: &scene_file,
                     scene_text: &scene_text,
@@ -568,7 +569,7 @@ fn run_inner(
         grid_corrections: rec.state.grid_corrections,
         solves: stats.solves + grid_stats.solves,
         corrections: stats.corrections,
-        wall_s: rec.state.wall_s_before + start.elapsed().as_secs_f64(),
+        wall_s: wall_before + start.elapsed().as_secs_f64(),
         step_cost: StepCost::new(&stats, cfg.order),
         stats: stats.clone(),
         stop: stop_out,
@@ -775,12 +776,6 @@ fn write_fields(path: &Path, scene: &ShellScene, snapshots: &[Snapshot]) -> Resu
 #[cfg(not(feature = "hdf5"))]
 fn write_fields(_path: &Path, _scene: &ShellScene, _snapshots: &[Snapshot]) -> Result<()> {
     unreachable!("scene validation rejects output.hdf5 without the hdf5 feature")
-}
-
-/// Whether far candidates of this model may be skipped (re-exported for the
-/// studies).
-pub fn skipping_allowed(model: &ShellModel, residual_tol: f64) -> bool {
-    far_nodes_may_be_skipped(model, residual_tol)
 }
 
 /// The initial tangent's factorization: a cheap check that a scene is not
