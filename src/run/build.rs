@@ -48,7 +48,12 @@ pub fn build_model(scene: &ShellScene) -> Result<ShellModel> {
         }
     };
     let x0 = &scene.mesh.nodes;
-    let quad_x = |q: usize| -> [Vec3; 4] { scene.mesh.quads[q].map(|n| x0[n]) };
+    let quads = &scene.mesh.quads;
+    let add_all = |dead: &mut [f64], f: Vec<Vec3>| {
+        for (n, fn_) in f.into_iter().enumerate() {
+            add(dead, n, fn_);
+        }
+    };
     for load in &scene.loads {
         match load {
             Load::Nodal { nodes, force } => {
@@ -65,38 +70,39 @@ pub fn build_model(scene: &ShellScene) -> Result<ShellModel> {
                 }
             }
             Load::Line { edges, force } => {
-                for e in edges {
-                    let f = edge_load::line_load_forces(*force, x0[e[0]], x0[e[1]]);
-                    add(&mut m.dead, e[0], f[0]);
-                    add(&mut m.dead, e[1], f[1]);
-                }
+                add_all(
+                    &mut m.dead,
+                    edge_load::assemble_line_load(x0, edges, *force),
+                );
             }
-            Load::Traction { quads, traction } => {
-                for &q in quads {
-                    let f = surface_load::dead_traction_forces(*traction, &quad_x(q));
-                    for (i, &n) in scene.mesh.quads[q].iter().enumerate() {
-                        add(&mut m.dead, n, f[i]);
-                    }
+            Load::Traction {
+                quads: elems,
+                traction,
+            } => {
+                let f = surface_load::assemble_dead_traction(*traction, quads, elems, x0);
+                add_all(&mut m.dead, f);
+            }
+            Load::Pressure {
+                quads: elems,
+                pressure,
+                follower: true,
+            } => {
+                for &q in elems {
+                    m.pressures.push(FollowerPressure {
+                        nodes: quads[q],
+                        pressure: *pressure,
+                    });
                 }
             }
             Load::Pressure {
-                quads,
+                quads: elems,
                 pressure,
-                follower,
+                follower: false,
             } => {
-                for &q in quads {
-                    if *follower {
-                        m.pressures.push(FollowerPressure {
-                            nodes: scene.mesh.quads[q],
-                            pressure: *pressure,
-                        });
-                    } else {
-                        let f = surface_load::dead_pressure_forces(*pressure, &quad_x(q));
-                        for (i, &n) in scene.mesh.quads[q].iter().enumerate() {
-                            add(&mut m.dead, n, f[i]);
-                        }
-                    }
-                }
+                // A dead pressure is the follower pressure of the reference
+                // configuration (its normal and area), held fixed.
+                let f = surface_load::assemble_follower(*pressure, quads, elems, x0);
+                add_all(&mut m.dead, f);
             }
         }
     }
