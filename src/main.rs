@@ -78,6 +78,12 @@ enum Command {
         scaling: Vec<String>,
         #[arg(long, default_value_t = 10)]
         scaling_steps: usize,
+        /// With --scaling: write each size's initial tangent as
+        /// run-NXxNY/tangent.mtx and factor it with each backend in its own
+        /// process (`anm factor`), and with the peers of reference/peers/ when
+        /// they are installed (factor.md).
+        #[arg(long)]
+        write_matrix: bool,
         /// Error target of the head-to-head (target.md): the fastest ANM and
         /// IDA settings reaching it are timed again, interleaved. A case whose
         /// two references disagree by more than target / 1.2 is compared at
@@ -106,6 +112,22 @@ enum Command {
         method: anm::study::bench::Method,
         /// Timed repetitions after a warm-up run; 0: a single run (for callgrind).
         #[arg(long, default_value_t = 20)]
+        repeat: usize,
+    },
+    /// Factor a sparse matrix (MatrixMarket, e.g. the tangent.mtx of a run
+    /// with output.tangent_matrix = true) with one backend: analysis, numeric
+    /// factorization (best of --repeat), one solve, factor entries, backward
+    /// error, peak memory of the process. One JSON line on stdout.
+    Factor {
+        matrix: PathBuf,
+        /// auto (from the matrix's symmetry), ldlt, lblt or lu.
+        #[arg(long, default_value = "auto")]
+        backend: String,
+        /// Threads of the factorization and solves.
+        #[arg(long, default_value_t = 1)]
+        threads: usize,
+        /// Numeric factorizations timed (the best is reported).
+        #[arg(long, default_value_t = 3)]
         repeat: usize,
     },
     /// Solve a scene with an external reference solver.
@@ -163,6 +185,27 @@ fn main() -> ExitCode {
 
 fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
     match cli.command {
+        Command::Factor {
+            matrix,
+            backend,
+            threads,
+            repeat,
+        } => {
+            let choice = match backend.as_str() {
+                "auto" => anm::linalg::Choice::Auto,
+                name => anm::linalg::Choice::Only(
+                    anm::linalg::Backend::from_name(name).ok_or_else(|| {
+                        anyhow::anyhow!("--backend: expected auto, ldlt, lblt or lu, got `{name}`")
+                    })?,
+                ),
+            };
+            if threads == 0 {
+                anyhow::bail!("--threads: must be >= 1");
+            }
+            let report = anm::study::factor::run(&matrix, choice, threads, repeat)?;
+            println!("{}", serde_json::to_string(&report)?);
+            Ok(ExitCode::SUCCESS)
+        }
         Command::Check { scene } => {
             let (kind, _) = load(&scene)?;
             if kind == Kind::Shell {
@@ -279,6 +322,7 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
             repeat,
             scaling,
             scaling_steps,
+            write_matrix,
             target,
             rounds,
             instructions,
@@ -296,6 +340,7 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
                     &scaling,
                     scaling_steps,
                     out,
+                    write_matrix,
                 );
             }
             // The plate-cylinder skip study times runs that write their
@@ -519,6 +564,7 @@ fn bench_scaling(
     sizes: &[String],
     steps: usize,
     out: &std::path::Path,
+    write_matrix: bool,
 ) -> anyhow::Result<ExitCode> {
     let parsed: Vec<(usize, usize)> = sizes
         .iter()
@@ -533,7 +579,7 @@ fn bench_scaling(
         anyhow::bail!("--scaling-steps must be >= 1");
     }
     let exe = std::env::current_exe().context("locating the anm executable")?;
-    let rows = anm::study::scaling::run(&exe, template, &parsed, steps, out, |r| {
+    let rows = anm::study::scaling::run(&exe, template, &parsed, steps, out, write_matrix, |r| {
         eprintln!(
             "{}x{}: {} unknowns, {} steps in {:.2} s, peak {:.0} MiB ({})",
             r.nx,
@@ -549,6 +595,31 @@ fn bench_scaling(
     std::fs::write(out.join("scaling.md"), &md)
         .with_context(|| format!("writing {}", out.join("scaling.md").display()))?;
     print!("{md}");
+    if write_matrix {
+        let mut text = String::new();
+        for r in &rows {
+            let mtx = out
+                .join(format!("run-{}x{}", r.nx, r.ny))
+                .join("tangent.mtx");
+            eprintln!("{}x{}: factoring {} ...", r.nx, r.ny, mtx.display());
+            let ours = anm::study::factor::compare(
+                &exe,
+                &mtx,
+                &[("ldlt", 1), ("ldlt", 2), ("lblt", 1), ("lu", 1)],
+            )?;
+            text += &format!(
+                "\n### {}x{} strip: initial tangent, {} unknowns, {} stored entries\n\n{}",
+                r.nx,
+                r.ny,
+                r.dofs,
+                ours.first().map_or(0, |o| o.entries),
+                anm::study::factor::markdown(&ours)
+            );
+        }
+        std::fs::write(out.join("factor.md"), &text)
+            .with_context(|| format!("writing {}", out.join("factor.md").display()))?;
+        print!("{text}");
+    }
     println!("outputs in {}", out.display());
     Ok(ExitCode::SUCCESS)
 }

@@ -2,7 +2,8 @@
 //! shape functions and Gauss points, surface loads on 4-node quadrilaterals
 //! ([`surface_load`]: dead traction, dead and follower pressure) and line
 //! loads on 2-node edges ([`edge_load`]), and the degrees of freedom of
-//! the shell nodes ([`dof`]).
+//! the shell nodes ([`dof`]), the tangent's sparsity pattern
+//! ([`pattern`]).
 //!
 //! Element conventions are those of [`crate::mesh`]: nodes 1..4
 //! counterclockwise at natural coordinates (ξ, η) = (−1, −1), (1, −1),
@@ -10,6 +11,7 @@
 
 pub mod dof;
 pub mod edge_load;
+pub mod pattern;
 pub mod surface_load;
 
 pub use crate::mesh::Vec3;

@@ -62,9 +62,11 @@ pub struct StepRow {
     pub geometric: bool,
     pub factorizations: usize,
     pub solves: usize,
+    /// Negative pivots of the step-start tangent (symmetric factorizations).
+    pub negative_pivots: Option<usize>,
 }
 
-const STEP_COLUMNS: [&str; 9] = [
+const STEP_COLUMNS: [&str; 10] = [
     "step",
     "lambda_start",
     "lambda_end",
@@ -74,6 +76,7 @@ const STEP_COLUMNS: [&str; 9] = [
     "geometric",
     "factorizations",
     "solves",
+    "negative_pivots",
 ];
 
 /// What the recorder keeps between steps: written into the checkpoint. The
@@ -286,6 +289,7 @@ impl<'s> Recorder<'s> {
                 (r.geometric as u8).to_string(),
                 r.factorizations.to_string(),
                 r.solves.to_string(),
+                r.negative_pivots.map(|k| k.to_string()).unwrap_or_default(),
             ];
             w.write_record(&rec)
                 .and_then(|_| w.flush().map_err(csv::Error::from))

@@ -12,7 +12,7 @@ pub use super::recorder::Snapshot;
 use super::recorder::{Recorder, RecorderState, StepRow};
 use crate::contact::{Obstacle, search};
 use crate::error::{Error, Result};
-use crate::linalg::SparseLu;
+use crate::linalg::LinearSolver;
 use crate::output::plot::{Curve, Panel, draw};
 use crate::output::vtk::{cylinder_surface, write_pvd, write_vtu};
 use crate::output::{Stop, write_csv, write_json};
@@ -295,8 +295,11 @@ fn run_inner(
             },
         )?;
         rec.vtk(&model, &full0, 0.0, "shell_0000.vtu")?;
+        if let (true, Some(d)) = (scene.output.tangent_matrix, out_dir) {
+            write_tangent(&mut model, &d.join("tangent.mtx"))?;
+        }
     }
-    let mut grid_lu = SparseLu::new();
+    let mut grid_lu = LinearSolver::new(cfg.linear);
     // Grid points are held to |R| / |R_lambda(0)| <= residual_tol in the
     // engine's unit-free residual norm (Metric::residual_norm).
     let metric = Metric::for_problem(&model, cfg.lambda_scale)?;
@@ -374,6 +377,7 @@ fn run_inner(
                     geometric: step.geometric.is_some(),
                     factorizations: stats.factorizations,
                     solves: stats.solves,
+                    negative_pivots: step.negative_pivots,
                 })?;
                 let every = scene.output.vtk_every;
                 if every > 0 && (step.index + 1).is_multiple_of(every) {
@@ -434,6 +438,7 @@ fn run_inner(
                         geometric: false,
                         factorizations: stats.factorizations,
                         solves: stats.solves,
+                        negative_pivots: stats.linear.negative_pivots,
                     })?;
                     if grid.iter().any(|g| (g - lambda).abs() < 1e-12) {
                         let g = (lambda / d).round() * d;
@@ -501,6 +506,7 @@ fn run_inner(
                 geometric: false,
                 factorizations: 1,
                 solves: 1,
+                negative_pivots: stats.linear.negative_pivots,
             })?;
             let u: Vec<f64> = u1.iter().map(|x| x * l_end).collect();
             (PathStop::End { lambda: l_end }, stats, (u, l_end))
@@ -778,13 +784,25 @@ fn write_fields(_path: &Path, _scene: &ShellScene, _snapshots: &[Snapshot]) -> R
     unreachable!("scene validation rejects output.hdf5 without the hdf5 feature")
 }
 
+/// The initial tangent (lambda = 0, free unknowns) as MatrixMarket.
+fn write_tangent(model: &mut ShellModel, path: &Path) -> Result<()> {
+    let zero = vec![0.0; model.ndof()];
+    let (k, _) = model.tangent(&zero, 0.0)?;
+    let (s, values) = k.compressed(None).map_err(|e| Error::write(path, e))?;
+    let symmetric = crate::linalg::symmetric(&k).map_err(|e| Error::write(path, e))?;
+    crate::linalg::matrix_market::write(path, &s, &values, symmetric).map_err(|source| Error::Io {
+        file: path.to_path_buf(),
+        source,
+    })
+}
+
 /// The initial tangent's factorization: a cheap check that a scene is not
 /// singular (used by `anm check`).
 pub fn check_factorizes(scene: &ShellScene) -> Result<()> {
     let mut m = build_model(scene)?;
     let zero = vec![0.0; m.ndof()];
     let (k, _) = m.tangent(&zero, 0.0)?;
-    SparseLu::new()
+    LinearSolver::default()
         .factorize(&k)
         .map(|_| ())
         .map_err(|detail| Error::SingularMatrix {

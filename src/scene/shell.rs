@@ -12,6 +12,7 @@ use super::{Checker, parse, read, relative_to};
 use crate::contact::{Motion, Obstacle};
 use crate::error::Result;
 use crate::fe::dof::{Component, Dof};
+use crate::linalg::{Backend, Choice};
 use crate::mesh::{Mesh, Vec3, gmsh, structured};
 use crate::series::ContinuationConfig;
 use crate::series::newton::{Control, NewtonConfig};
@@ -174,6 +175,7 @@ struct RawSolver {
     newton_step: Option<f64>,
     newton_max_step: Option<f64>,
     newton_tol: Option<f64>,
+    linear_solver: Option<String>,
 }
 
 #[derive(Deserialize)]
@@ -184,6 +186,7 @@ struct RawOutput {
     plot: Option<bool>,
     snapshots: Option<Vec<f64>>,
     hdf5: Option<bool>,
+    tangent_matrix: Option<bool>,
 }
 
 /// A load, scaled by lambda.
@@ -293,6 +296,8 @@ pub struct OutputSpec {
     pub plot: bool,
     pub snapshots: Vec<f64>,
     pub hdf5: bool,
+    /// Write the initial tangent as tangent.mtx (MatrixMarket).
+    pub tangent_matrix: bool,
 }
 
 /// A validated shell scene.
@@ -569,6 +574,7 @@ pub fn load(path: &Path) -> Result<ShellScene> {
             plot: o.plot.unwrap_or(true),
             snapshots,
             hdf5,
+            tangent_matrix: o.tangent_matrix.unwrap_or(false),
         },
         mesh,
     })
@@ -1218,8 +1224,21 @@ fn solver(c: &Checker, s: &RawSolver, size: f64) -> Result<(Method, Continuation
         Some(l) => c.positive("solver.length_scale", l)?,
         None => size,
     };
+    let linear = match s.linear_solver.as_deref() {
+        None | Some("auto") => Choice::Auto,
+        Some(name) => match Backend::from_name(name) {
+            Some(b) => Choice::Only(b),
+            None => {
+                return Err(c.fail(
+                    "solver.linear_solver",
+                    format!("expected \"auto\", \"ldlt\", \"lblt\" or \"lu\", got \"{name}\""),
+                ));
+            }
+        },
+    };
     let cfg = ContinuationConfig {
         order,
+        linear,
         eps: c.positive("solver.eps", s.eps.unwrap_or(1e-8))?,
         lambda_end,
         max_steps,
@@ -1280,6 +1299,7 @@ fn solver(c: &Checker, s: &RawSolver, size: f64) -> Result<(Method, Continuation
                 tol: c.positive("solver.newton_tol", s.newton_tol.unwrap_or(residual_tol))?,
                 lambda_end,
                 max_steps,
+                linear,
                 ..Default::default()
             })
         }

@@ -19,7 +19,7 @@ use super::path::Path;
 use super::stats::{Stats, charge};
 use super::stop::Stop;
 use crate::error::{Error, Result};
-use crate::linalg::{Factorization, SparseLu, SparseMatrix};
+use crate::linalg::{Choice, Factorization, LinearSolver, SparseMatrix};
 use std::time::Instant;
 
 /// What a static problem supplies to the engine.
@@ -70,6 +70,8 @@ pub struct ContinuationConfig {
     /// to |lambda_end - lambda0| for steps independent of how lambda is
     /// normalized; default 1.
     pub lambda_scale: f64,
+    /// Linear-solver backend: chosen per tangent (default) or forced.
+    pub linear: Choice,
 }
 
 impl Default for ContinuationConfig {
@@ -85,6 +87,7 @@ impl Default for ContinuationConfig {
             max_corrections: 10,
             min_step: 1e-12,
             lambda_scale: 1.0,
+            linear: Choice::Auto,
         }
     }
 }
@@ -111,6 +114,9 @@ pub struct PathStep {
     /// End point after correction.
     pub u_end: Vec<f64>,
     pub lambda_end: f64,
+    /// Negative pivots of the step-start tangent (its number of negative
+    /// eigenvalues) when it was factored symmetrically.
+    pub negative_pivots: Option<usize>,
 }
 
 impl PathStep {
@@ -272,19 +278,23 @@ pub fn run<P: ContinuationProblem>(
 /// Factorizes a tangent, counting and timing it; a failure becomes a
 /// singular-matrix error at (step, lambda).
 pub(crate) fn factorize(
-    lu: &mut SparseLu,
+    lu: &mut LinearSolver,
     k: &SparseMatrix,
     stats: &mut Stats,
     step: usize,
     lambda: f64,
 ) -> Result<Factorization> {
     let t = Instant::now();
+    let before = lu.stats().fallbacks;
     let f = lu.factorize(k).map_err(|detail| Error::SingularMatrix {
         step,
         param: "lambda",
         at: lambda,
         detail,
     })?;
+    stats
+        .linear
+        .record(&f, lu.stats().fallbacks - before, lu.stats());
     stats.factorizations += 1;
     charge(&mut stats.factorization_s, t);
     Ok(f)
@@ -309,6 +319,7 @@ mod tests {
             end_residual: 0.0,
             u_end: vec![1.0],
             lambda_end: 0.0,
+            negative_pivots: None,
         };
         assert!(!step.lambda_is_monotone());
         let a = step.a_at_lambda_all(0.21);

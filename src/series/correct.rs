@@ -42,7 +42,7 @@
 use super::continuation::{ContinuationProblem, factorize};
 use super::stats::{Stats, charge};
 use crate::error::{Error, Result};
-use crate::linalg::{Factorization, SparseLu, dot, norm};
+use crate::linalg::{Factorization, LinearSolver, dot, norm};
 use std::borrow::Cow;
 use std::time::Instant;
 
@@ -259,7 +259,7 @@ pub fn correct<P: ContinuationProblem + ?Sized>(
     constraint: &Constraint,
     settings: &Settings,
     metric: &Metric,
-    lu: &mut SparseLu,
+    lu: &mut LinearSolver,
     stats: &mut Stats,
 ) -> Result<Corrected> {
     let mut u = u;
@@ -419,7 +419,7 @@ pub fn correct_at_lambda<P: ContinuationProblem + ?Sized>(
     scale: f64,
     metric: &Metric,
     max_iter: usize,
-    lu: &mut SparseLu,
+    lu: &mut LinearSolver,
     stats: &mut Stats,
     step: usize,
 ) -> Result<(Vec<f64>, usize)> {

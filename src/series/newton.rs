@@ -25,7 +25,7 @@ use super::correct::{self, Constraint, Jacobian, Metric, Settings};
 use super::stats::{Stats, charge};
 use super::stop::Stop;
 use crate::error::{Error, Result};
-use crate::linalg::SparseLu;
+use crate::linalg::{Choice, LinearSolver};
 use std::time::Instant;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -51,6 +51,8 @@ pub struct NewtonConfig {
     /// Characteristic range Lambda of lambda in the arclength (as
     /// `ContinuationConfig::lambda_scale`); default 1.
     pub lambda_scale: f64,
+    /// Linear-solver backend (as `ContinuationConfig::linear`).
+    pub linear: Choice,
 }
 
 impl Default for NewtonConfig {
@@ -66,6 +68,7 @@ impl Default for NewtonConfig {
             lambda_end: 1.0,
             max_steps: 100_000,
             lambda_scale: 1.0,
+            linear: Choice::Auto,
         }
     }
 }
@@ -84,7 +87,7 @@ pub fn run<P: ContinuationProblem>(
     mut on_point: impl FnMut(&[f64], f64, &Stats) -> Result<()>,
 ) -> NewtonResult {
     let mut stats = Stats::default();
-    let mut lu = SparseLu::new();
+    let mut lu = LinearSolver::new(cfg.linear);
     let metric = match Metric::for_problem(&*problem, cfg.lambda_scale) {
         Ok(m) => m,
         Err(e) => {
@@ -281,7 +284,7 @@ fn tangent_direction<P: ContinuationProblem>(
     lambda: f64,
     forward: f64,
     metric: &Metric,
-    lu: &mut SparseLu,
+    lu: &mut LinearSolver,
     stats: &mut Stats,
     index: usize,
 ) -> Result<(Vec<f64>, f64)> {
@@ -311,7 +314,7 @@ fn correct<P: ContinuationProblem>(
     dl: f64,
     cfg: &NewtonConfig,
     metric: &Metric,
-    lu: &mut SparseLu,
+    lu: &mut LinearSolver,
     stats: &mut Stats,
     index: usize,
 ) -> Result<(Vec<f64>, f64, usize)> {

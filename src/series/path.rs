@@ -43,7 +43,7 @@ use super::pade;
 use super::stats::{Stats, charge};
 use super::stop::Stop;
 use crate::error::{Error, Result};
-use crate::linalg::{Factorization, SparseLu, norm};
+use crate::linalg::{Factorization, LinearSolver, norm};
 use serde::{Deserialize, Serialize};
 use std::time::Instant;
 
@@ -74,7 +74,7 @@ pub struct Path<'p, P: ContinuationProblem> {
     prev_dir: Option<(Vec<f64>, f64)>,
     index: usize,
     forward: f64,
-    lu: SparseLu,
+    lu: LinearSolver,
     stats: Stats,
     stopped: Option<Stop>,
 }
@@ -126,6 +126,7 @@ impl<'p, P: ContinuationProblem> Path<'p, P> {
                 Ok(m) => (m, None),
                 Err(e) => (Metric::unit(), Some(Stop::Failed(e))),
             };
+        let lu = LinearSolver::new(cfg.linear);
         Self {
             problem,
             cfg,
@@ -135,7 +136,7 @@ impl<'p, P: ContinuationProblem> Path<'p, P> {
             prev_dir: cp.prev_dir,
             index: cp.index,
             forward,
-            lu: SparseLu::new(),
+            lu,
             stats: cp.stats,
             stopped,
         }
@@ -250,7 +251,7 @@ pub(crate) fn series_step<P: ContinuationProblem + ?Sized>(
     metric: &Metric,
     prev_dir: &Option<(Vec<f64>, f64)>,
     forward: f64,
-    lu: &mut SparseLu,
+    lu: &mut LinearSolver,
     stats: &mut Stats,
 ) -> Result<PathStep> {
     let n_ord = cfg.order;
@@ -337,6 +338,7 @@ pub(crate) fn series_step<P: ContinuationProblem + ?Sized>(
         end_residual: 0.0,
         u_end: vec![],
         lambda_end: 0.0,
+        negative_pivots: fact.inertia().map(|i| i.0),
     };
     // Padé on the scaled terms: its denominators are those of the scaled
     // series, and the approximant is linear in the terms, so that

@@ -27,6 +27,10 @@ pub struct Stats {
     /// a clock read there costs as much as a 4x4 solve.
     pub solve_s: f64,
     pub series_s: f64,
+    /// The linear solver: factorizations per backend, hand-overs, largest
+    /// backward error, factor size, last inertia.
+    #[serde(default)]
+    pub linear: crate::linalg::SolverStats,
 }
 
 /// Adds the seconds elapsed since `start` to `slot`.

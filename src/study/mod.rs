@@ -7,6 +7,7 @@ pub mod audit;
 pub mod bench;
 pub mod bench_shell;
 pub mod check;
+pub mod factor;
 pub mod pool;
 pub mod scaling;
 pub mod shell_audit;

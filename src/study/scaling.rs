@@ -45,7 +45,8 @@ fn io(file: &Path) -> impl FnOnce(std::io::Error) -> Error + '_ {
 }
 
 /// The scene `template` (a plate-cylinder TOML) on the nx × ny strip mesh,
-/// stopped after `steps` steps, without VTK or plots; written into `dir`.
+/// stopped after `steps` steps, without VTK or plots, with its initial
+/// tangent as tangent.mtx if `write_matrix`; written into `dir`.
 /// Returns the scene file and its truncation order.
 fn write_case(
     template: &Path,
@@ -53,6 +54,7 @@ fn write_case(
     ny: usize,
     steps: usize,
     dir: &Path,
+    write_matrix: bool,
 ) -> Result<(PathBuf, usize)> {
     let mesh = structured::rectangle(0.0, 2.0, -0.1, 0.1, nx, ny);
     let msh = dir.join(format!("strip-{nx}x{ny}.msh"));
@@ -73,15 +75,16 @@ fn write_case(
         "file",
         toml::Value::String(msh.display().to_string()),
     );
-    set(
-        "mesh",
-        "clamp",
-        toml::Value::Array(vec![toml::Value::String("clamp".into())]),
-    );
-    set("mesh", "contact", toml::Value::String("strip".into()));
+    // The written mesh carries the physical groups `clamp` (edge s0) and
+    // `strip` (every node) that the template's [[fix]] and [contact] name.
     set("solver", "max_steps", toml::Value::Integer(steps as i64));
     set("output", "vtk_every", toml::Value::Integer(0));
     set("output", "plot", toml::Value::Boolean(false));
+    set(
+        "output",
+        "tangent_matrix",
+        toml::Value::Boolean(write_matrix),
+    );
     let order = scene
         .get("solver")
         .and_then(|s| s.get("order"))
@@ -100,12 +103,13 @@ pub fn run(
     sizes: &[(usize, usize)],
     steps: usize,
     dir: &Path,
+    write_matrix: bool,
     mut progress: impl FnMut(&ScalingRow),
 ) -> Result<Vec<ScalingRow>> {
     create_dir(dir)?;
     let mut rows = vec![];
     for &(nx, ny) in sizes {
-        let (scene, order) = write_case(template, nx, ny, steps, dir)?;
+        let (scene, order) = write_case(template, nx, ny, steps, dir, write_matrix)?;
         let out = dir.join(format!("run-{nx}x{ny}"));
         let status = Command::new(exe)
             .arg("run")

@@ -2,7 +2,7 @@
 //! `#[path = "common/shell.rs"] mod shell_common;`).
 #![allow(dead_code)]
 
-use anm::linalg::SparseLu;
+use anm::linalg::LinearSolver;
 use anm::mesh::{Mesh, Vec3};
 use anm::series::ContinuationProblem;
 use anm::shell::kinematics::shape;
@@ -49,7 +49,9 @@ pub fn add_area_load(m: &mut ShellModel, mesh: &Mesh, q: Vec3) {
 pub fn linear(m: &mut ShellModel) -> Vec<f64> {
     let u0 = vec![0.0; m.ndof()];
     let (k, rl) = m.tangent(&u0, 0.0).expect("tangent");
-    let f = SparseLu::new().factorize(&k).expect("factorization");
+    let f = LinearSolver::default()
+        .factorize(&k)
+        .expect("factorization");
     let neg: Vec<f64> = rl.iter().map(|x| -x).collect();
     let u = f.solve(&neg);
     assert!(

@@ -317,13 +317,13 @@ fn newton_arclength_takes_the_same_steps_in_m_and_mm_with_scaling() {
 
 #[test]
 fn correct_at_lambda_returns_to_the_path_at_fixed_load() {
-    use anm::linalg::SparseLu;
+    use anm::linalg::LinearSolver;
     use anm::series::{Stats, correct_at_lambda};
     // On the first stable branch, w = 0.02 m; lambda from the closed form.
     let w = 0.02;
     let lambda = lambda_exact(w);
     let mut p = Truss::new(1.0, 2, true);
-    let (mut lu, mut stats) = (SparseLu::new(), Stats::default());
+    let (mut lu, mut stats) = (LinearSolver::default(), Stats::default());
     let (u, it) = correct_at_lambda(
         &mut p,
         vec![1.05 * w],

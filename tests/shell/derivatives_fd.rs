@@ -56,8 +56,8 @@ fn tangent_matches_finite_differences_of_the_residual() {
     );
     let n = m.ndof();
     let mut kd = vec![vec![0.0; n]; n];
-    for t in &k.entries {
-        kd[t.row][t.col] += t.val;
+    for (r, c, v) in k.entries() {
+        kd[r][c] += v;
     }
     let kmax = kd.iter().flatten().fold(0.0f64, |a, b| a.max(b.abs()));
     let h = 1e-6;

@@ -76,8 +76,8 @@ fn run(exact: impl Fn(&Vec3) -> [f64; 6], free_boundary: &[usize]) -> f64 {
     let nfull = 6 * mesh.nodes.len();
     let (k, _) = anm::series::ContinuationProblem::tangent(&mut m, &vec![0.0; nfull], 0.0).unwrap();
     let mut kd = vec![vec![0.0; nfull]; nfull];
-    for t in &k.entries {
-        kd[t.row][t.col] += t.val;
+    for (r, c, v) in k.entries() {
+        kd[r][c] += v;
     }
     let is_fixed = |i: usize| fixed.contains(&(i / 6, i % 6));
     let free: Vec<usize> = (0..nfull).filter(|&i| !is_fixed(i)).collect();
@@ -93,7 +93,7 @@ fn run(exact: impl Fn(&Vec3) -> [f64; 6], free_boundary: &[usize]) -> f64 {
         .map(|&i| -(0..nfull).map(|j| kd[i][j] * up[j]).sum::<f64>())
         .collect();
     let a = anm::linalg::SparseMatrix::from_dense(&rows);
-    let f = anm::linalg::SparseLu::new().factorize(&a).unwrap();
+    let f = anm::linalg::LinearSolver::default().factorize(&a).unwrap();
     let x = f.solve(&rhs);
     let mut u = up.clone();
     for (xi, &i) in x.iter().zip(&free) {

@@ -11,7 +11,7 @@
 //! terms, one residual); "step" times whole steps, which a loaded machine
 //! rarely leaves undisturbed for their whole length (parts is the figure).
 
-use anm::linalg::{Factorization, SparseLu, dot};
+use anm::linalg::{Factorization, LinearSolver, dot};
 use anm::run::build::build_model;
 use anm::scene::shell::load;
 use anm::series::ContinuationProblem;
@@ -72,7 +72,7 @@ fn series(
 }
 
 /// One step: tangent, factorization, series, residual at the step end.
-fn step(m: &mut ShellModel, lu: &mut SparseLu, u0: &[f64], l0: f64, order: usize) {
+fn step(m: &mut ShellModel, lu: &mut LinearSolver, u0: &[f64], l0: f64, order: usize) {
     let (k, rl) = m.tangent(u0, l0).unwrap();
     let f = lu.factorize(&k).unwrap();
     let (us, ls) = series(m, &f, &rl, u0, l0, order);
@@ -115,7 +115,7 @@ fn plate_cylinder_step_cost() {
         assert!(!m.active_pairs().is_empty(), "contact must be active");
         let order = cfg.order;
         let (u0, l0) = (res.u_end, res.lambda_end);
-        let mut lu = SparseLu::new();
+        let mut lu = LinearSolver::default();
         let (k, rl) = m.tangent(&u0, l0).unwrap();
         let f = lu.factorize(&k).unwrap();
         let (us, ls) = series(&mut m, &f, &rl, &u0, l0, order);
@@ -146,7 +146,7 @@ fn plate_cylinder_step_cost() {
         let ratio = parts / (factor + order as f64 * solve);
         println!(
             "{label:>6} {n:>5} {:>6} {:>9.3} {:>9.3} {:>9.4} {:>9.4} {:>9.3} {:>9.3} {:>9.3} {ratio:>9.2}",
-            k.entries.len(),
+            k.stored(),
             ms(tangent),
             ms(factor),
             ms(solve),

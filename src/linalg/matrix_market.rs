@@ -1,0 +1,144 @@
+//! MatrixMarket coordinate files (NIST, "The Matrix Market Exchange
+//! Formats", 1996): how a tangent leaves `anm` for other sparse solvers
+//! (reference/peers/) and comes back for `anm factor`.
+//!
+//! A symmetric matrix is written as `symmetric` with its lower triangle only,
+//! as the format specifies; anything else as `general`. Indices are 1-based.
+
+use std::io::{BufRead, BufReader, BufWriter, Write};
+use std::path::Path;
+
+use super::sparse_matrix::{SparseMatrix, Structure};
+
+/// Writes the compressed-column matrix (s, values); `symmetric` writes the
+/// lower triangle with the `symmetric` qualifier.
+pub fn write(path: &Path, s: &Structure, values: &[f64], symmetric: bool) -> std::io::Result<()> {
+    let mut w = BufWriter::new(std::fs::File::create(path)?);
+    let kind = if symmetric { "symmetric" } else { "general" };
+    writeln!(w, "%%MatrixMarket matrix coordinate real {kind}")?;
+    writeln!(w, "% written by anm {}", env!("CARGO_PKG_VERSION"))?;
+    let keep = |r: usize, c: usize| !symmetric || r >= c;
+    let count = (0..s.n())
+        .map(|c| {
+            s.row_idx()[s.col_ptr()[c]..s.col_ptr()[c + 1]]
+                .iter()
+                .filter(|&&r| keep(r, c))
+                .count()
+        })
+        .sum::<usize>();
+    writeln!(w, "{} {} {count}", s.n(), s.n())?;
+    for c in 0..s.n() {
+        for k in s.col_ptr()[c]..s.col_ptr()[c + 1] {
+            let r = s.row_idx()[k];
+            if keep(r, c) {
+                writeln!(w, "{} {} {:.17e}", r + 1, c + 1, values[k])?;
+            }
+        }
+    }
+    w.flush()
+}
+
+/// Reads a real square coordinate matrix (general or symmetric).
+pub fn read(path: &Path) -> Result<SparseMatrix, String> {
+    let file = std::fs::File::open(path).map_err(|e| e.to_string())?;
+    let mut lines = BufReader::new(file).lines().enumerate();
+    let bad = |line: usize, what: &str| format!("line {}: {what}", line + 1);
+    let (_, header) = lines.next().ok_or("empty file")?;
+    let header = header.map_err(|e| e.to_string())?.to_lowercase();
+    let words: Vec<&str> = header.split_whitespace().collect();
+    if words.len() != 5 || words[0] != "%%matrixmarket" || words[1] != "matrix" {
+        return Err(bad(0, "not a MatrixMarket matrix header"));
+    }
+    if words[2] != "coordinate" || !matches!(words[3], "real" | "integer") {
+        return Err(bad(0, "only real coordinate matrices are read"));
+    }
+    let symmetric = match words[4] {
+        "general" => false,
+        "symmetric" => true,
+        other => return Err(bad(0, &format!("unsupported symmetry `{other}`"))),
+    };
+    let mut size = None;
+    let mut m = SparseMatrix::new(0);
+    let mut seen = 0usize;
+    for (i, line) in lines {
+        let line = line.map_err(|e| e.to_string())?;
+        let t = line.trim();
+        if t.is_empty() || t.starts_with('%') {
+            continue;
+        }
+        let f: Vec<&str> = t.split_whitespace().collect();
+        match size {
+            None => {
+                let v: Vec<usize> = f
+                    .iter()
+                    .map(|x| {
+                        x.parse()
+                            .map_err(|_| bad(i, "size line: expected 3 integers"))
+                    })
+                    .collect::<Result<_, _>>()?;
+                if v.len() != 3 || v[0] != v[1] {
+                    return Err(bad(
+                        i,
+                        "size line: expected `n n entries` of a square matrix",
+                    ));
+                }
+                size = Some((v[0], v[2]));
+                m = SparseMatrix::new(v[0]);
+            }
+            Some((n, _)) => {
+                let entry = || -> Option<(usize, usize, f64)> {
+                    if f.len() != 3 {
+                        return None;
+                    }
+                    Some((f[0].parse().ok()?, f[1].parse().ok()?, f[2].parse().ok()?))
+                };
+                let (r, c, v) = entry().ok_or_else(|| bad(i, "expected `row col value`"))?;
+                if r == 0 || c == 0 || r > n || c > n {
+                    return Err(bad(i, &format!("index ({r}, {c}) outside 1..={n}")));
+                }
+                m.add(r - 1, c - 1, v);
+                if symmetric && r != c {
+                    m.add(c - 1, r - 1, v);
+                }
+                seen += 1;
+            }
+        }
+    }
+    match size {
+        Some((_, entries)) if entries == seen => Ok(m),
+        Some((_, entries)) => Err(format!("{seen} entries, the size line says {entries}")),
+        None => Err("no size line".into()),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn symmetric_and_general_matrices_round_trip() {
+        let a = SparseMatrix::from_dense(&[
+            vec![4.0, -1.0, 0.0],
+            vec![-1.0, 4.0, 0.5],
+            vec![0.0, 0.5, 3.0],
+        ]);
+        let (s, v) = a.compressed(None).unwrap();
+        let dir = std::env::temp_dir().join(format!("anm-mm-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        for symmetric in [true, false] {
+            let p = dir.join(format!("a-{symmetric}.mtx"));
+            write(&p, &s, &v, symmetric).unwrap();
+            let b = read(&p).unwrap();
+            let (_, w) = b.compressed(Some(&s)).unwrap();
+            assert_eq!(v, w);
+        }
+        std::fs::write(
+            dir.join("bad.mtx"),
+            "%%MatrixMarket matrix coordinate real general\n2 2 1\n3 1 1.0\n",
+        )
+        .unwrap();
+        let e = read(&dir.join("bad.mtx")).unwrap_err();
+        assert!(e.contains("line 3") && e.contains("outside"), "{e}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}

@@ -1,0 +1,282 @@
+//! Sparse matrices under assembly: either free triplets (small problems,
+//! tests) or values in a fixed compressed-column [`Structure`] that the
+//! assembler builds once from its connectivity (large shells: no triplet list,
+//! no sort per factorization).
+
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::{Arc, OnceLock};
+
+/// A compressed-column pattern (rows sorted, no duplicates), shared between
+/// the tangents that use it. Its `id` tells a solver that a pattern is the
+/// one it analysed, without comparing the index arrays.
+#[derive(Debug)]
+pub struct Structure {
+    n: usize,
+    col_ptr: Vec<usize>,
+    row_idx: Vec<usize>,
+    id: u64,
+    /// For every slot (i, j), the slot of (j, i); `None` when the pattern is
+    /// not structurally symmetric. Computed on first use.
+    transpose: OnceLock<Option<Vec<usize>>>,
+}
+
+static NEXT_ID: AtomicU64 = AtomicU64::new(1);
+
+impl Structure {
+    /// The pattern of the positions `coords` in an n × n matrix (duplicates
+    /// merged). Positions outside the matrix are an error.
+    pub fn from_coords(
+        n: usize,
+        coords: impl IntoIterator<Item = (usize, usize)>,
+    ) -> Result<Self, String> {
+        let mut by_col: Vec<Vec<usize>> = vec![Vec::new(); n];
+        for (r, c) in coords {
+            if r >= n || c >= n {
+                return Err(format!("entry ({r}, {c}) outside the {n} x {n} matrix"));
+            }
+            by_col[c].push(r);
+        }
+        let mut col_ptr = Vec::with_capacity(n + 1);
+        col_ptr.push(0);
+        let mut row_idx = Vec::new();
+        for rows in &mut by_col {
+            rows.sort_unstable();
+            rows.dedup();
+            row_idx.extend_from_slice(rows);
+            col_ptr.push(row_idx.len());
+            *rows = Vec::new();
+        }
+        Ok(Self::from_parts(n, col_ptr, row_idx))
+    }
+
+    /// A pattern given in compressed columns; rows must be strictly
+    /// increasing within each column.
+    pub fn from_compressed(
+        n: usize,
+        col_ptr: Vec<usize>,
+        row_idx: Vec<usize>,
+    ) -> Result<Self, String> {
+        let ok = col_ptr.len() == n + 1
+            && col_ptr[0] == 0
+            && col_ptr[n] == row_idx.len()
+            && col_ptr.windows(2).all(|w| {
+                w[0] <= w[1]
+                    && row_idx[w[0]..w[1]].windows(2).all(|r| r[0] < r[1])
+                    && row_idx[w[0]..w[1]].iter().all(|&r| r < n)
+            });
+        if !ok {
+            return Err("compressed columns: pointers or sorted rows invalid".into());
+        }
+        Ok(Self::from_parts(n, col_ptr, row_idx))
+    }
+
+    fn from_parts(n: usize, col_ptr: Vec<usize>, row_idx: Vec<usize>) -> Self {
+        Self {
+            n,
+            col_ptr,
+            row_idx,
+            id: NEXT_ID.fetch_add(1, Ordering::Relaxed),
+            transpose: OnceLock::new(),
+        }
+    }
+
+    pub fn n(&self) -> usize {
+        self.n
+    }
+
+    pub fn nnz(&self) -> usize {
+        self.row_idx.len()
+    }
+
+    pub fn col_ptr(&self) -> &[usize] {
+        &self.col_ptr
+    }
+
+    pub fn row_idx(&self) -> &[usize] {
+        &self.row_idx
+    }
+
+    /// A number unique to this pattern in the process.
+    pub fn id(&self) -> u64 {
+        self.id
+    }
+
+    /// The slot of (row, col), if the pattern holds it.
+    pub fn slot(&self, row: usize, col: usize) -> Option<usize> {
+        let start = *self.col_ptr.get(col)?;
+        let rows = &self.row_idx[start..self.col_ptr[col + 1]];
+        rows.binary_search(&row).ok().map(|k| start + k)
+    }
+
+    /// The slot of the transposed position of every slot, if the pattern is
+    /// structurally symmetric.
+    pub fn transpose_slots(&self) -> Option<&[usize]> {
+        self.transpose
+            .get_or_init(|| {
+                let mut t = Vec::with_capacity(self.nnz());
+                for c in 0..self.n {
+                    for &r in &self.row_idx[self.col_ptr[c]..self.col_ptr[c + 1]] {
+                        t.push(self.slot(c, r)?);
+                    }
+                }
+                Some(t)
+            })
+            .as_deref()
+    }
+
+    /// This pattern with the positions `extra` added.
+    fn union(&self, extra: &[(usize, usize)]) -> Result<Self, String> {
+        let own = (0..self.n).flat_map(|c| {
+            self.row_idx[self.col_ptr[c]..self.col_ptr[c + 1]]
+                .iter()
+                .map(move |&r| (r, c))
+        });
+        Self::from_coords(self.n, own.chain(extra.iter().copied()))
+    }
+}
+
+/// A square sparse matrix under assembly. With a [`Structure`], `add` sums
+/// into the slot of (row, col) (binary search in the column); positions
+/// outside it, and every position without one, are kept as triplets.
+#[derive(Clone, Debug, Default)]
+pub struct SparseMatrix {
+    pub n: usize,
+    structure: Option<Arc<Structure>>,
+    values: Vec<f64>,
+    extra: Vec<(usize, usize, f64)>,
+}
+
+impl SparseMatrix {
+    /// An n × n matrix collecting triplets.
+    pub fn new(n: usize) -> Self {
+        Self {
+            n,
+            ..Self::default()
+        }
+    }
+
+    /// A zero matrix on `structure`.
+    pub fn with_structure(structure: Arc<Structure>) -> Self {
+        Self {
+            n: structure.n,
+            values: vec![0.0; structure.nnz()],
+            structure: Some(structure),
+            extra: Vec::new(),
+        }
+    }
+
+    /// Adds `value` at (row, col); repeated entries are summed.
+    pub fn add(&mut self, row: usize, col: usize, value: f64) {
+        if let Some(k) = self.structure.as_ref().and_then(|s| s.slot(row, col)) {
+            self.values[k] += value;
+        } else {
+            self.extra.push((row, col, value));
+        }
+    }
+
+    /// A dense row-major matrix as sparse (small problems and tests).
+    pub fn from_dense(rows: &[Vec<f64>]) -> Self {
+        let mut m = Self::new(rows.len());
+        for (i, row) in rows.iter().enumerate() {
+            for (j, &v) in row.iter().enumerate() {
+                if v != 0.0 || i == j {
+                    m.add(i, j, v);
+                }
+            }
+        }
+        m
+    }
+
+    /// Every stored entry as (row, col, value); a position may appear more
+    /// than once (the values are then summed).
+    pub fn entries(&self) -> impl Iterator<Item = (usize, usize, f64)> + '_ {
+        let structured = self.structure.iter().flat_map(move |s| {
+            (0..s.n).flat_map(move |c| {
+                (s.col_ptr[c]..s.col_ptr[c + 1]).map(move |k| (s.row_idx[k], c, self.values[k]))
+            })
+        });
+        structured.chain(self.extra.iter().copied())
+    }
+
+    /// Number of stored entries (slots and loose triplets).
+    pub fn stored(&self) -> usize {
+        self.values.len() + self.extra.len()
+    }
+
+    /// y = A x.
+    pub fn mul_vec(&self, x: &[f64]) -> Vec<f64> {
+        let mut y = vec![0.0; self.n];
+        for (r, c, v) in self.entries() {
+            y[r] += v * x[c];
+        }
+        y
+    }
+
+    /// The matrix in compressed columns: its structure (the assembler's, or
+    /// one built from the triplets, `known` reused when it is the same
+    /// pattern) and the summed values per slot.
+    pub fn compressed(
+        &self,
+        known: Option<&Arc<Structure>>,
+    ) -> Result<(Arc<Structure>, Vec<f64>), String> {
+        if self.extra.is_empty() {
+            if let Some(s) = &self.structure {
+                return Ok((Arc::clone(s), self.values.clone()));
+            }
+        }
+        let extra: Vec<(usize, usize)> = self.extra.iter().map(|&(r, c, _)| (r, c)).collect();
+        let built = match &self.structure {
+            Some(s) => s.union(&extra)?,
+            None => Structure::from_coords(self.n, extra)?,
+        };
+        let structure = match known {
+            Some(k) if k.col_ptr == built.col_ptr && k.row_idx == built.row_idx => Arc::clone(k),
+            _ => Arc::new(built),
+        };
+        let mut values = vec![0.0; structure.nnz()];
+        for (r, c, v) in self.entries() {
+            let k = structure.slot(r, c).expect("every entry is in the union");
+            values[k] += v;
+        }
+        Ok((structure, values))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn structured_and_loose_entries_sum_to_the_same_matrix() {
+        let s =
+            Arc::new(Structure::from_coords(3, [(0, 0), (1, 1), (2, 2), (1, 0), (0, 1)]).unwrap());
+        let mut a = SparseMatrix::with_structure(Arc::clone(&s));
+        a.add(0, 0, 1.0);
+        a.add(0, 0, 2.0);
+        a.add(2, 1, 5.0); // outside the structure
+        a.add(1, 0, -1.0);
+        let (c, v) = a.compressed(Some(&s)).unwrap();
+        assert_ne!(c.id(), s.id(), "a new position makes a new pattern");
+        assert_eq!(c.nnz(), 6);
+        assert_eq!(v[c.slot(0, 0).unwrap()], 3.0);
+        assert_eq!(v[c.slot(2, 1).unwrap()], 5.0);
+        assert_eq!(a.mul_vec(&[1.0, 1.0, 1.0]), vec![3.0, -1.0, 5.0]);
+        assert!(c.transpose_slots().is_none(), "(2, 1) has no (1, 2)");
+        assert!(s.transpose_slots().is_some());
+    }
+
+    #[test]
+    fn triplets_with_the_known_pattern_reuse_it() {
+        let mut a = SparseMatrix::new(2);
+        a.add(1, 1, 2.0);
+        a.add(0, 0, 1.0);
+        let (s1, _) = a.compressed(None).unwrap();
+        let mut b = SparseMatrix::new(2);
+        b.add(0, 0, 4.0);
+        b.add(1, 1, 1.0);
+        let (s2, v) = b.compressed(Some(&s1)).unwrap();
+        assert_eq!(s1.id(), s2.id());
+        assert_eq!(v, vec![4.0, 1.0]);
+        assert!(Structure::from_coords(2, [(2, 0)]).is_err());
+    }
+}

@@ -1,0 +1,144 @@
+//! `anm factor`: one sparse matrix (MatrixMarket), one backend, measured as
+//! the peers in reference/peers/ measure theirs: symbolic analysis apart, the
+//! numeric factorization best of `repeat`, one solve, the factor's entries,
+//! the backward error of the solve and the peak memory of the process. Run
+//! one backend per process so that the peak memory is that backend's.
+
+use std::path::Path;
+use std::time::Instant;
+
+use serde::Serialize;
+
+use crate::error::{Error, Result};
+use crate::linalg::{Choice, LinearSolver, matrix_market};
+
+/// The measurements of one backend on one matrix.
+#[derive(Clone, Debug, Serialize)]
+pub struct FactorReport {
+    pub matrix: String,
+    pub n: usize,
+    /// Stored entries of the assembled matrix (both triangles).
+    pub entries: usize,
+    pub backend: String,
+    pub threads: usize,
+    pub analysis_s: f64,
+    /// Numeric factorization, best of `repeat`.
+    pub factorization_s: f64,
+    pub solve_s: f64,
+    /// Entries of L (symmetric backends; 0 for LU, whose faer factor does
+    /// not report its size).
+    pub factor_entries: usize,
+    pub backward_error: f64,
+    pub negative_pivots: Option<usize>,
+    pub peak_rss_bytes: Option<u64>,
+}
+
+/// Factors `path` `repeat` times with `choice` on `threads` threads.
+pub fn run(path: &Path, choice: Choice, threads: usize, repeat: usize) -> Result<FactorReport> {
+    let fail = |problem: String| Error::Invalid {
+        file: path.to_path_buf(),
+        key: "matrix".into(),
+        problem,
+    };
+    let a = matrix_market::read(path).map_err(fail)?;
+    let mut solver = LinearSolver::new(choice).with_threads(threads);
+    let mut best = f64::INFINITY;
+    let mut last = None;
+    for _ in 0..repeat.max(1) {
+        let f = solver.factorize(&a).map_err(fail)?;
+        best = best.min(f.numeric_seconds());
+        last = Some(f);
+    }
+    let f = last.expect("at least one factorization");
+    let b: Vec<f64> = (0..a.n).map(|i| 1.0 + (i % 10) as f64).collect();
+    let t = Instant::now();
+    let x = f.solve(&b);
+    let solve_s = t.elapsed().as_secs_f64();
+    if !x.iter().all(|v| v.is_finite()) {
+        return Err(fail("the solve is not finite".into()));
+    }
+    let stats = solver.stats();
+    Ok(FactorReport {
+        matrix: path.display().to_string(),
+        n: a.n,
+        entries: stats.matrix_entries,
+        backend: f.backend().name().to_string(),
+        threads,
+        analysis_s: stats.analysis_s,
+        factorization_s: best,
+        solve_s,
+        factor_entries: stats.factor_entries,
+        backward_error: f.backward_error(),
+        negative_pivots: f.inertia().map(|i| i.0),
+        peak_rss_bytes: crate::output::peak_rss_bytes(),
+    })
+}
+
+/// Runs `exe factor MATRIX --backend B --threads T` for each (B, T), each in
+/// its own process (its own peak memory).
+pub fn compare(exe: &Path, matrix: &Path, configs: &[(&str, usize)]) -> Result<Vec<FactorReport>> {
+    let mut out = vec![];
+    for &(backend, threads) in configs {
+        let run = std::process::Command::new(exe)
+            .arg("factor")
+            .arg(matrix)
+            .args(["--backend", backend, "--threads", &threads.to_string()])
+            .output()
+            .map_err(|source| Error::Io {
+                file: exe.to_path_buf(),
+                source,
+            })?;
+        let text = String::from_utf8_lossy(&run.stdout);
+        let v: serde_json::Value = serde_json::from_str(text.trim()).map_err(|e| {
+            Error::study(
+                "factor",
+                matrix.display().to_string(),
+                format!(
+                    "{backend} on {threads} threads: {e}; it printed: {}",
+                    String::from_utf8_lossy(&run.stderr)
+                ),
+            )
+        })?;
+        let num = |k: &str| v[k].as_f64().unwrap_or(f64::NAN);
+        out.push(FactorReport {
+            matrix: matrix.display().to_string(),
+            n: v["n"].as_u64().unwrap_or(0) as usize,
+            entries: v["entries"].as_u64().unwrap_or(0) as usize,
+            backend: v["backend"].as_str().unwrap_or("?").to_string(),
+            threads,
+            analysis_s: num("analysis_s"),
+            factorization_s: num("factorization_s"),
+            solve_s: num("solve_s"),
+            factor_entries: v["factor_entries"].as_u64().unwrap_or(0) as usize,
+            backward_error: num("backward_error"),
+            negative_pivots: v["negative_pivots"].as_u64().map(|k| k as usize),
+            peak_rss_bytes: v["peak_rss_bytes"].as_u64(),
+        });
+    }
+    Ok(out)
+}
+
+/// The factorization table of one matrix.
+pub fn markdown(rows: &[FactorReport]) -> String {
+    let mut s = String::from(
+        "| solver | threads | analysis (s) | factorization (s) | solve (s) | factor entries | backward error | peak memory of the process (MiB) |\n|---|---|---|---|---|---|---|---|\n",
+    );
+    for r in rows {
+        let entries = if r.factor_entries > 0 {
+            format!("{:.3e}", r.factor_entries as f64)
+        } else {
+            "–".into()
+        };
+        s += &format!(
+            "| {} | {} | {:.3} | {:.3} | {:.4} | {entries} | {:.1e} | {:.0} |\n",
+            r.backend,
+            r.threads,
+            r.analysis_s,
+            r.factorization_s,
+            r.solve_s,
+            r.backward_error,
+            r.peak_rss_bytes.unwrap_or(0) as f64 / 1048576.0
+        );
+    }
+    s
+}
