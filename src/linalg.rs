@@ -20,6 +20,10 @@
 
 mod dense_lu;
 pub use dense_lu::DenseLu;
+#[cfg(feature = "mumps")]
+pub mod mpi;
+#[cfg(feature = "mumps")]
+pub mod mumps;
 
 use std::sync::Arc;
 
