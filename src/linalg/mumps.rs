@@ -355,6 +355,14 @@ impl Mumps {
         self.id.infog[i - 1]
     }
 
+    /// RINFOG(i) (1-based), identical on every rank: e.g. after a solve
+    /// with ICNTL(11) = 1, RINFOG(7), RINFOG(8) the backward errors,
+    /// RINFOG(9) an upper bound of the relative forward error, RINFOG(10),
+    /// RINFOG(11) condition numbers.
+    pub fn rinfog(&self, i: usize) -> f64 {
+        self.id.rinfog[i - 1]
+    }
+
     /// INFO(i) (1-based), this rank's.
     pub fn info(&self, i: usize) -> i32 {
         self.id.info[i - 1]
