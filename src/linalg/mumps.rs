@@ -393,7 +393,9 @@ impl Mumps {
     }
 
     /// Analysis of a pattern (0-based row/col coordinates, duplicates
-    /// allowed, summed by MUMPS). Centralized on the host.
+    /// allowed, summed by MUMPS). Centralized on the host: every rank
+    /// passes the same arguments (they are checked everywhere, so that an
+    /// error returns on every rank alike), only the host keeps a copy.
     pub fn analyse(&mut self, n: usize, rows: &[usize], cols: &[usize]) -> Result<(), String> {
         if rows.len() != cols.len() {
             return Err(format!(
@@ -413,6 +415,20 @@ impl Mumps {
         }
         self.analysed = false;
         self.factorized = false;
+        self.n = n;
+        self.n_input = rows.len();
+        self.id.n = n as i32;
+        if !self.is_host() {
+            // With a centralized matrix (ICNTL(18) = 0) MUMPS reads the
+            // entries on the host only: the other ranks keep no copy.
+            self.kept = None;
+            self.irn = Vec::new();
+            self.jcn = Vec::new();
+            self.values = Vec::new();
+            self.run(1, "analysis")?;
+            self.analysed = true;
+            return Ok(());
+        }
         let upper = self.sym != 0 && rows.iter().zip(cols).any(|(r, c)| r < c);
         self.kept = upper.then(|| (0..rows.len()).filter(|&k| rows[k] >= cols[k]).collect());
         let (irn, jcn): (Vec<i32>, Vec<i32>) = match &self.kept {
@@ -426,12 +442,9 @@ impl Mumps {
                 .map(|(&r, &c)| (r as i32 + 1, c as i32 + 1))
                 .unzip(),
         };
-        self.n = n;
-        self.n_input = rows.len();
         self.irn = irn;
         self.jcn = jcn;
         self.values = vec![0.0; self.irn.len()];
-        self.id.n = n as i32;
         self.id.nnz = self.irn.len() as i64;
         self.id.nz = i32::try_from(self.irn.len()).unwrap_or(0);
         self.run(1, "analysis")?;
@@ -457,6 +470,7 @@ impl Mumps {
         }
         self.factorized = false;
         match &self.kept {
+            _ if !self.is_host() => {}
             Some(kept) => {
                 for (v, &k) in self.values.iter_mut().zip(kept) {
                     *v = values[k];
@@ -494,13 +508,17 @@ impl Mumps {
             ));
         }
         self.rhs.clear();
-        self.rhs.extend_from_slice(b);
+        if self.is_host() {
+            self.rhs.extend_from_slice(b);
+        }
         self.id.nrhs = 1;
         self.id.lrhs = self.n as i32;
         let solved = self.run(3, "solve");
         self.id.rhs = std::ptr::null_mut();
         solved?;
-        b.copy_from_slice(&self.rhs);
+        if self.is_host() {
+            b.copy_from_slice(&self.rhs);
+        }
         let _g = MPI_LOCK.lock().unwrap_or_else(|e| e.into_inner());
         broadcast_locked(b)
     }
@@ -540,6 +558,12 @@ impl Mumps {
         let e = self.id.infog[28] as i64;
         // Negative values count millions of entries.
         if e < 0 { -e * 1_000_000 } else { e }
+    }
+
+    /// True on the MUMPS host (rank 0), which holds the matrix and the
+    /// right-hand side.
+    fn is_host(&self) -> bool {
+        super::mpi::rank() == 0
     }
 
     pub fn rank(&self) -> usize {
