@@ -11,6 +11,7 @@
 set -euo pipefail
 
 packages=(cmake build-essential libclang-dev libhdf5-dev pkg-config)
+packages+=(libmumps-dev openmpi-bin libopenmpi-dev)  # --features mumps (MUMPS 5 + OpenMPI, src/linalg/mumps.rs)
 
 missing=()
 for p in "${packages[@]}"; do

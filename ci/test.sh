@@ -14,3 +14,4 @@ echo "== cargo test (default features)"
 cargo test --locked
 echo "== cargo test --features reference"
 cargo test --locked --features reference
+echo "== cargo test --features mumps (MUMPS, mpirun -n 2)"; cargo test --locked --features mumps --test linalg_mumps

@@ -174,13 +174,20 @@ enum ReferenceSolver {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
-    match dispatch(cli) {
+    // MPI lives for the whole process (feature mumps): every MUMPS instance
+    // is dropped inside `dispatch`, before MPI_Finalize.
+    #[cfg(feature = "mumps")]
+    anm::linalg::mpi::mpi_init();
+    let code = match dispatch(cli) {
         Ok(code) => code,
         Err(e) => {
             eprintln!("error: {e:#}");
             ExitCode::FAILURE
         }
-    }
+    };
+    #[cfg(feature = "mumps")]
+    anm::linalg::mpi::mpi_finalize();
+    code
 }
 
 fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
@@ -521,6 +528,16 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
                 Kind::Shell => {
                     // Ctrl-C / SIGTERM end a shell run at the next step end.
                     anm::run::interrupt::install();
+                    // Under `mpirun -n P` (feature mumps) every rank runs
+                    // the same path for MUMPS's collective calls; only rank
+                    // 0 writes files and prints.
+                    #[cfg(feature = "mumps")]
+                    if !anm::linalg::mpi::is_root() {
+                        let sc = anm::scene::shell::load(&scene)?;
+                        anm::run::shell::run_loaded(&sc, None, false)
+                            .with_context(|| format!("running {}", scene.display()))?;
+                        return Ok(ExitCode::SUCCESS);
+                    }
                     let report = anm::run::run_scene(&scene, &out, !quiet)
                         .with_context(|| format!("running {}", scene.display()))?;
                     Ok(shell_summary(&report, &out))

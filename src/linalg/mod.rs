@@ -11,6 +11,10 @@
 mod dense_lu;
 mod lu;
 pub mod matrix_market;
+#[cfg(feature = "mumps")]
+pub mod mpi;
+#[cfg(feature = "mumps")]
+pub mod mumps;
 mod solver;
 mod sparse_matrix;
 mod symmetric;

@@ -45,9 +45,14 @@ pub enum Backend {
     Lblt,
     /// faer supernodal LU, partial pivoting (any tangent).
     Lu,
+    /// MUMPS 5 over MPI (feature `mumps`): symmetric (SYM = 2) or general,
+    /// never chosen automatically.
+    #[cfg(feature = "mumps")]
+    Mumps,
 }
 
 impl Backend {
+    /// The faer backends, in the order of the automatic hand-over.
     pub const ALL: [Backend; 3] = [Backend::Ldlt, Backend::Lblt, Backend::Lu];
 
     pub fn name(self) -> &'static str {
@@ -55,15 +60,22 @@ impl Backend {
             Backend::Ldlt => "ldlt",
             Backend::Lblt => "lblt",
             Backend::Lu => "lu",
+            #[cfg(feature = "mumps")]
+            Backend::Mumps => "mumps",
         }
     }
 
     pub fn from_name(name: &str) -> Option<Self> {
+        #[cfg(feature = "mumps")]
+        if name == "mumps" {
+            return Some(Backend::Mumps);
+        }
         Self::ALL.into_iter().find(|b| b.name() == name)
     }
 
+    /// Needs a symmetric matrix.
     fn symmetric(self) -> bool {
-        self != Backend::Lu
+        matches!(self, Backend::Ldlt | Backend::Lblt)
     }
 }
 
@@ -85,6 +97,11 @@ pub struct SolverStats {
     pub ldlt: usize,
     pub lblt: usize,
     pub lu: usize,
+    pub mumps: usize,
+    /// MUMPS's memory in use during the last factorization (MB = 1e6 bytes):
+    /// this rank, the largest rank, all ranks (INFO(22), INFOG(21),
+    /// INFOG(22)).
+    pub mumps_memory_mb: Option<(f64, f64, f64)>,
     /// Factorizations rejected by the backward-error check (or failed) and
     /// handed to the next backend.
     pub fallbacks: usize,
@@ -111,6 +128,11 @@ impl SolverStats {
             Backend::Ldlt => self.ldlt += 1,
             Backend::Lblt => self.lblt += 1,
             Backend::Lu => self.lu += 1,
+            #[cfg(feature = "mumps")]
+            Backend::Mumps => self.mumps += 1,
+        }
+        if let Some(m) = f.mumps_memory_mb {
+            self.mumps_memory_mb = Some(m);
         }
         self.fallbacks += fallbacks;
         self.max_backward_error = self.max_backward_error.max(f.backward_error);
@@ -129,6 +151,8 @@ pub struct LinearSolver {
     structure: Option<Arc<Structure>>,
     symmetric: Option<Arc<SymmetricSymbolic>>,
     lu: Option<Arc<LuSymbolic>>,
+    #[cfg(feature = "mumps")]
+    mumps: Option<Arc<std::sync::Mutex<mumps_backend::Instance>>>,
     stats: SolverStats,
 }
 
@@ -141,6 +165,10 @@ impl Default for LinearSolver {
 enum Factor {
     Symmetric(Arc<SymmetricSymbolic>, SymmetricFactor),
     Lu(Arc<LuSymbolic>, LuFactor),
+    /// MUMPS keeps the factors inside its instance: a factorization is valid
+    /// until the solver's next one (checked by the generation number).
+    #[cfg(feature = "mumps")]
+    Mumps(Arc<std::sync::Mutex<mumps_backend::Instance>>, u64),
 }
 
 /// A numeric factorization, ready for any number of solves.
@@ -153,6 +181,7 @@ pub struct Factorization {
     inertia: Option<(usize, usize, usize)>,
     /// Seconds of the numeric factorization alone (no analysis, no check).
     numeric_s: f64,
+    mumps_memory_mb: Option<(f64, f64, f64)>,
 }
 
 impl LinearSolver {
@@ -165,6 +194,8 @@ impl LinearSolver {
             structure: None,
             symmetric: None,
             lu: None,
+            #[cfg(feature = "mumps")]
+            mumps: None,
             stats: SolverStats::default(),
         }
     }
@@ -192,6 +223,10 @@ impl LinearSolver {
             self.structure = Some(Arc::clone(&s));
             self.symmetric = None;
             self.lu = None;
+            #[cfg(feature = "mumps")]
+            {
+                self.mumps = None;
+            }
         }
         if let Some(k) = values.iter().position(|v| !v.is_finite()) {
             let (r, c) = position(&s, k);
@@ -238,6 +273,34 @@ impl LinearSolver {
     ) -> Result<Factorization, String> {
         let start = Instant::now();
         let mut analysis = self.stats.analysis_s;
+        #[cfg(feature = "mumps")]
+        if backend == Backend::Mumps {
+            let symmetric = is_symmetric(s, values);
+            if self.mumps.is_none() {
+                let t = Instant::now();
+                let inst = mumps_backend::Instance::new(s, symmetric)?;
+                self.mumps = Some(Arc::new(std::sync::Mutex::new(inst)));
+                self.stats.analysis_s += t.elapsed().as_secs_f64();
+                self.stats.analyses += 1;
+            }
+            let shared = Arc::clone(self.mumps.as_ref().expect("set above"));
+            let t = Instant::now();
+            let (generation, memory, negative, entries) =
+                shared.lock().expect("MUMPS lock").factorize(values)?;
+            self.stats.factor_entries = entries;
+            let mut f = Factorization {
+                numeric_s: t.elapsed().as_secs_f64(),
+                factor: Factor::Mumps(shared, generation),
+                par: self.par,
+                n: s.n(),
+                backend,
+                backward_error: f64::NAN,
+                inertia: symmetric.then_some((negative, 0, s.n() - negative)),
+                mumps_memory_mb: Some(memory),
+            };
+            f.backward_error = backward_error(&f, s, values);
+            return Ok(f);
+        }
         let factor = if backend.symmetric() {
             if self.symmetric.is_none() {
                 let t = Instant::now();
@@ -275,6 +338,7 @@ impl LinearSolver {
             backend,
             backward_error: f64::NAN,
             inertia: None,
+            mumps_memory_mb: None,
         };
         f.backward_error = backward_error(&f, s, values);
         if let Factor::Symmetric(sym, sf) = &f.factor {
@@ -292,6 +356,14 @@ impl Factorization {
         match &self.factor {
             Factor::Symmetric(sym, f) => f.solve_in_place(sym, &mut x, self.par),
             Factor::Lu(sym, f) => f.solve_in_place(sym, &mut x, self.par),
+            #[cfg(feature = "mumps")]
+            Factor::Mumps(inst, generation) => {
+                if let Err(e) = inst.lock().expect("MUMPS lock").solve(*generation, &mut x) {
+                    // A failed solve reads as a singular system (non-finite).
+                    eprintln!("MUMPS solve: {e}");
+                    x.fill(f64::NAN);
+                }
+            }
         }
         x
     }
@@ -314,6 +386,57 @@ impl Factorization {
     /// tangent; `None` after an LU.
     pub fn inertia(&self) -> Option<(usize, usize, usize)> {
         self.inertia
+    }
+}
+
+#[cfg(feature = "mumps")]
+mod mumps_backend {
+    use super::super::mumps::Mumps;
+    use super::Structure;
+
+    /// One MUMPS instance, analysed for one pattern.
+    pub struct Instance {
+        mumps: Mumps,
+        generation: u64,
+    }
+
+    impl Instance {
+        /// SYM = 2 (general symmetric: the lower triangle is kept) for a
+        /// symmetric matrix, 0 otherwise; the analysis of the pattern.
+        pub fn new(s: &Structure, symmetric: bool) -> Result<Self, String> {
+            let mut mumps = Mumps::new(if symmetric { 2 } else { 0 })?;
+            let cols: Vec<usize> = (0..s.n())
+                .flat_map(|c| std::iter::repeat_n(c, s.col_ptr()[c + 1] - s.col_ptr()[c]))
+                .collect();
+            mumps.analyse(s.n(), s.row_idx(), &cols)?;
+            Ok(Self {
+                mumps,
+                generation: 0,
+            })
+        }
+
+        /// Factorizes; returns the generation, the memory figures, the
+        /// negative pivots and the factor entries.
+        pub fn factorize(
+            &mut self,
+            values: &[f64],
+        ) -> Result<(u64, (f64, f64, f64), usize, usize), String> {
+            self.mumps.factorize(values)?;
+            self.generation += 1;
+            Ok((
+                self.generation,
+                self.mumps.memory_mb(),
+                self.mumps.negative_pivots(),
+                self.mumps.factor_entries().max(0) as usize,
+            ))
+        }
+
+        pub fn solve(&mut self, generation: u64, x: &mut [f64]) -> Result<(), String> {
+            if generation != self.generation {
+                return Err("solve with a factorization replaced by a later one".into());
+            }
+            self.mumps.solve(x)
+        }
     }
 }
 

@@ -1231,7 +1231,9 @@ fn solver(c: &Checker, s: &RawSolver, size: f64) -> Result<(Method, Continuation
             None => {
                 return Err(c.fail(
                     "solver.linear_solver",
-                    format!("expected \"auto\", \"ldlt\", \"lblt\" or \"lu\", got \"{name}\""),
+                    format!(
+                        "expected \"auto\", \"ldlt\", \"lblt\", \"lu\" or (feature mumps) \"mumps\", got \"{name}\""
+                    ),
                 ));
             }
         },
