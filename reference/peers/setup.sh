@@ -2,7 +2,9 @@
 # Creates reference/peers/.venv (git-ignored) with the peers that
 # factor_peers.py runs: MKL Pardiso (pypardiso, with Intel's mkl wheel) and
 # MUMPS (python-mumps: its manylinux wheel bundles sequential MUMPS 5.2.1
-# with the SCOTCH and PORD orderings and OpenBLAS). Wheels only, from PyPI.
+# with the METIS, SCOTCH, PORD, AMD, AMF and QAMD orderings and its own
+# OpenBLAS), and threadpoolctl (which BLAS/OpenMP pools run, how many
+# threads). Wheels only, from PyPI.
 # python-mumps 0.0.2, the last release with a wheel for this Python, was
 # built against NumPy 1.x: numpy < 2 and a SciPy that still supports it.
 # Idempotent; quiet unless something is installed.
@@ -12,9 +14,9 @@ python=${PYTHON:-python3}
 if [ ! -x .venv/bin/python ]; then
     "$python" -m venv .venv
 fi
-want=("numpy<2" "scipy>=1.11,<1.15" "pypardiso==0.4.7" "python-mumps==0.0.2")
+want=("numpy<2" "scipy>=1.11,<1.15" "pypardiso==0.4.7" "python-mumps==0.0.2" "threadpoolctl>=3")
 if ! .venv/bin/python - <<'PY' 2>/dev/null
-import numpy, scipy, pypardiso, mumps
+import numpy, scipy, pypardiso, mumps, threadpoolctl
 assert numpy.__version__.startswith("1.")
 PY
 then
