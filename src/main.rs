@@ -137,7 +137,12 @@ enum Command {
         max_steps: usize,
         /// Write stress.md, stress.csv and every run's result as
         /// DIR/items/K.json.
-        #[arg(short, long, value_name = "DIR", required_unless_present = "list_items")]
+        #[arg(
+            short,
+            long,
+            value_name = "DIR",
+            required_unless_present = "list_items"
+        )]
         out: Option<PathBuf>,
         #[command(flatten)]
         items: ItemArgs,

@@ -144,14 +144,16 @@ const PARAMETERS: [&str; 4] = ["omega", "zeta", "eta", "penalty"];
 
 /// The items of the sweep, in order: each parameter's values in turn; every
 /// value validated before any run.
-pub fn jobs(scene: &FrictionScene, sweeps: &Sweeps) -> Result<Vec<(&'static str, f64, FrictionScene)>> {
+pub fn jobs(
+    scene: &FrictionScene,
+    sweeps: &Sweeps,
+) -> Result<Vec<(&'static str, f64, FrictionScene)>> {
     let mut jobs = vec![];
-    for (name, values) in PARAMETERS.into_iter().zip([
-        &sweeps.omega,
-        &sweeps.zeta,
-        &sweeps.eta,
-        &sweeps.penalty,
-    ]) {
+    for (name, values) in
+        PARAMETERS
+            .into_iter()
+            .zip([&sweeps.omega, &sweeps.zeta, &sweeps.eta, &sweeps.penalty])
+    {
         for &v in values {
             jobs.push((name, v, with_parameter(scene, name, v)?));
         }

@@ -190,7 +190,9 @@ pub fn run_job(job: &StressJob) -> StressCase {
             let c = check(s, &report)?;
             Ok::<_, crate::Error>((report, c))
         })
-        .map_or_else(failed, |r| shell_case(scene.clone(), axis, *value, *uz_ref, r)),
+        .map_or_else(failed, |r| {
+            shell_case(scene.clone(), axis, *value, *uz_ref, r)
+        }),
     }
 }
 

@@ -93,7 +93,10 @@ pub mod exact_vec {
         v.iter().map(|x| Exact(*x)).collect::<Vec<_>>().serialize(s)
     }
     pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<f64>, D::Error> {
-        Ok(Vec::<Exact>::deserialize(d)?.into_iter().map(|e| e.0).collect())
+        Ok(Vec::<Exact>::deserialize(d)?
+            .into_iter()
+            .map(|e| e.0)
+            .collect())
     }
 }
 

@@ -78,10 +78,7 @@ fn csv_without(text: &str, drop: &[&str]) -> String {
 /// A Markdown table without the column whose header is `drop` (every line
 /// starting with `|` loses that cell).
 fn md_without(text: &str, drop: &str) -> String {
-    let header = text
-        .lines()
-        .find(|l| l.starts_with('|'))
-        .expect("a table");
+    let header = text.lines().find(|l| l.starts_with('|')).expect("a table");
     let cells: Vec<&str> = header.split('|').map(str::trim).collect();
     let j = cells
         .iter()
@@ -180,12 +177,18 @@ fn check_sweep(name: &str, sweep: &[&str], outputs: &Outputs, slurm: bool) {
         .map(|l| l.split('\t').next().unwrap().to_string())
         .collect();
     assert!(ids.len() >= 3, "{list}");
-    assert_eq!(ids, (0..ids.len()).map(|k| k.to_string()).collect::<Vec<_>>());
+    assert_eq!(
+        ids,
+        (0..ids.len()).map(|k| k.to_string()).collect::<Vec<_>>()
+    );
 
     // 1. Single process.
     let single = dir.join("single");
     let t = std::time::Instant::now();
-    ok("single", anm(&[sweep, &["-o", single.to_str().unwrap()]].concat()));
+    ok(
+        "single",
+        anm(&[sweep, &["-o", single.to_str().unwrap()]].concat()),
+    );
     let t_single = t.elapsed().as_secs_f64();
     for k in 0..ids.len() {
         assert!(single.join(format!("items/{k}.json")).is_file());
@@ -335,11 +338,17 @@ fn an_item_refuses_a_folder_of_another_sweep_and_a_missing_item() {
     // An item beyond the list.
     let out = anm(&[&a[..], &["--item", "2", "-o", d]].concat());
     let err = String::from_utf8_lossy(&out.stderr);
-    assert!(!out.status.success() && err.contains("2 items, 0 to 1"), "{err}");
+    assert!(
+        !out.status.success() && err.contains("2 items, 0 to 1"),
+        "{err}"
+    );
     // The merge names item 1, not yet run.
     let out = anm(&["merge", d]);
     let err = String::from_utf8_lossy(&out.stderr);
-    assert!(!out.status.success() && err.contains("1 (omega=1e-1)"), "{err}");
+    assert!(
+        !out.status.success() && err.contains("1 (omega=1e-1)"),
+        "{err}"
+    );
     ok("item 1", anm(&[&a[..], &["--item", "1", "-o", d]].concat()));
     let md = ok("merge", anm(&["merge", d]));
     assert!(md.contains("| omega | 1.000e-1 |"), "{md}");
