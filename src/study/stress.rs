@@ -110,13 +110,13 @@ pub enum StressJob {
         scene: String,
         axis: &'static str,
         value: f64,
-        run: FrictionScene,
+        run: Box<FrictionScene>,
     },
     Shell {
         scene: String,
         axis: &'static str,
         value: f64,
-        run: ShellScene,
+        run: Box<ShellScene>,
         /// uz_A(1) to meet (the canonical figure where eta and K are the scene's).
         uz_ref: Option<f64>,
     },
@@ -154,7 +154,7 @@ pub fn friction_jobs(
                     scene: sc.kind.name().to_string(),
                     axis,
                     value: v,
-                    run: s,
+                    run: Box::new(s),
                 });
             }
         }
@@ -304,7 +304,7 @@ pub fn shell_jobs(
                     scene: name.clone(),
                     axis,
                     value: v,
-                    run: with_grid_snapshots(&s),
+                    run: Box::new(with_grid_snapshots(&s)),
                     uz_ref,
                 });
             }
