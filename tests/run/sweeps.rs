@@ -353,3 +353,49 @@ fn an_item_refuses_a_folder_of_another_sweep_and_a_missing_item() {
     let md = ok("merge", anm(&["merge", d]));
     assert!(md.contains("| omega | 1.000e-1 |"), "{md}");
 }
+
+/// The scaling study item by item (one size per item, each its own `anm
+/// run` child): the merge of the single-process run's item files is its
+/// scaling.md byte for byte; items run one by one merge to the same mesh,
+/// unknowns, steps and stop (the other columns are timings and memory).
+#[test]
+fn scaling_items_merge_to_the_single_process_table() {
+    let dir = scratch("scaling");
+    let d = |s: &str| dir.join(s).to_str().unwrap().to_string();
+    let sweep = ["bench", "--scaling", "20x2,40x4", "--scaling-steps", "2"];
+    let list = ok(
+        "--list-items",
+        anm(&[&sweep[..], &["--list-items"]].concat()),
+    );
+    assert_eq!(list, "0\t20x2\n1\t40x4\n");
+    ok("single", anm(&[&sweep[..], &["-o", &d("single")]].concat()));
+    std::fs::create_dir_all(dir.join("copy/items")).unwrap();
+    for f in ["sweep.json", "items/0.json", "items/1.json"] {
+        std::fs::copy(dir.join("single").join(f), dir.join("copy").join(f)).unwrap();
+    }
+    ok("merge copy", anm(&["merge", &d("copy")]));
+    assert_eq!(
+        read(&dir.join("single/scaling.md")),
+        read(&dir.join("copy/scaling.md"))
+    );
+    for k in ["1", "0"] {
+        ok(
+            "item",
+            anm(&[&sweep[..], &["--item", k, "-o", &d("items")]].concat()),
+        );
+    }
+    ok("merge items", anm(&["merge", &d("items")]));
+    let fixed = |p: &Path| -> Vec<String> {
+        read(p)
+            .lines()
+            .filter(|l| l.starts_with("| ") && !l.starts_with("| mesh"))
+            .map(|l| {
+                let c: Vec<&str> = l.split('|').map(str::trim).collect();
+                format!("{} {} {} {}", c[1], c[2], c[3], c[9])
+            })
+            .collect()
+    };
+    let a = fixed(&dir.join("single/scaling.md"));
+    assert_eq!(a, ["20×2 360 2 max_steps", "40×4 1200 2 max_steps"]);
+    assert_eq!(a, fixed(&dir.join("items/scaling.md")));
+}
