@@ -54,9 +54,12 @@ enum Command {
         /// Values of the penalty stiffness K (eq. 3, N/m).
         #[arg(long, value_delimiter = ',')]
         penalty: Vec<f64>,
-        /// Write audit.csv, audit.md and audit.svg into DIR (otherwise no files).
+        /// Write audit.csv, audit.md and audit.svg into DIR (otherwise no
+        /// files), and every run's result as DIR/items/K.json.
         #[arg(short, long, value_name = "DIR")]
         out: Option<PathBuf>,
+        #[command(flatten)]
+        items: ItemArgs,
     },
     /// Work-precision benchmark: error against wall time per method and
     /// setting, tables on stdout; with -o, also bench.csv, bench.md, bench.svg
@@ -101,6 +104,11 @@ enum Command {
         /// needs it for its meshes, scenes and runs).
         #[arg(short, long, value_name = "DIR")]
         out: Option<PathBuf>,
+        /// With --scaling: one size per item (the work-precision benchmark
+        /// and the head-to-head compare timings taken side by side on one
+        /// machine and are not split).
+        #[command(flatten)]
+        items: ItemArgs,
     },
     /// Time one method and setting on a friction scene: `repeat` solves after
     /// a warm-up, wall min / median / max. Under callgrind (see
@@ -149,9 +157,39 @@ enum Command {
         /// Step budget per run.
         #[arg(long, default_value_t = 20000)]
         max_steps: usize,
-        #[arg(short, long, value_name = "DIR")]
-        out: PathBuf,
+        /// Write stress.md, stress.csv and every run's result as
+        /// DIR/items/K.json.
+        #[arg(
+            short,
+            long,
+            value_name = "DIR",
+            required_unless_present = "list_items"
+        )]
+        out: Option<PathBuf>,
+        #[command(flatten)]
+        items: ItemArgs,
     },
+    /// Build the tables and plots of a sweep run item by item (`anm audit |
+    /// stress | bench --scaling ... --item K -o DIR`) from DIR/sweep.json and
+    /// DIR/items/*.json: the same files as the single-process run. Names the
+    /// missing items, if any.
+    Merge {
+        /// The -o DIR of the items.
+        dir: PathBuf,
+    },
+}
+
+/// Running a sweep item by item (GNU parallel, Slurm job arrays; see
+/// docs/cluster.md).
+#[derive(clap::Args)]
+struct ItemArgs {
+    /// Run item K of the sweep only and write DIR/items/K.json (needs -o
+    /// DIR); `anm merge DIR` builds the tables once every item has run.
+    #[arg(long, value_name = "K", requires = "out")]
+    item: Option<usize>,
+    /// Print the items of the sweep, `K<TAB>label` per line, and exit.
+    #[arg(long, conflicts_with = "item")]
+    list_items: bool,
 }
 
 #[cfg(feature = "reference")]
@@ -275,53 +313,16 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
             eta,
             penalty,
             out,
+            items,
         } => {
-            let (kind, friction) = load(&scene)?;
-            let sweeps = anm::study::audit::Sweeps {
+            let spec = anm::study::sweep::Spec::Audit {
+                scene,
                 omega,
                 zeta,
                 eta,
                 penalty,
             };
-            let Some(sc) = friction else {
-                let sc = anm::scene::shell::load(&scene)?;
-                if sweeps.eta.is_empty() && sweeps.penalty.is_empty() {
-                    // Names the offending option when omega or zeta was given.
-                    anm::study::shell_audit::audit(&sc, &sweeps)?;
-                    anyhow::bail!(
-                        "{}: nothing to sweep: give at least one of --eta, --penalty (`{}` is frictionless)",
-                        scene.display(),
-                        kind.name()
-                    );
-                }
-                let rows = anm::study::shell_audit::audit(&sc, &sweeps)?;
-                if let Some(out) = &out {
-                    anm::study::shell_audit::write(&sc, &rows, out)?;
-                }
-                print!("{}", anm::study::shell_audit::markdown(&sc, &rows));
-                if let Some(out) = &out {
-                    println!("\noutputs in {}", out.display());
-                }
-                return Ok(ExitCode::SUCCESS);
-            };
-            if sweeps.omega.is_empty()
-                && sweeps.zeta.is_empty()
-                && sweeps.eta.is_empty()
-                && sweeps.penalty.is_empty()
-            {
-                anyhow::bail!(
-                    "nothing to sweep: give at least one of --omega, --zeta, --eta, --penalty"
-                );
-            }
-            let rows = anm::study::audit::audit(&sc, &sweeps)?;
-            if let Some(out) = &out {
-                anm::study::audit::write(&sc, &rows, out)?;
-            }
-            print!("{}", anm::study::audit::markdown(&sc, &rows));
-            if let Some(out) = &out {
-                println!("\noutputs in {}", out.display());
-            }
-            Ok(ExitCode::SUCCESS)
+            sweep(&spec, &items, out.as_deref())
         }
         Command::Bench {
             scenes,
@@ -334,20 +335,27 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
             rounds,
             instructions,
             out,
+            items,
         } => {
             use anm::study::{bench, target as head};
             if !scaling.is_empty() {
-                let Some(out) = &out else {
+                if out.is_none() && !items.list_items {
                     anyhow::bail!(
                         "--scaling writes its meshes, scenes and runs into a folder: give -o DIR"
                     );
-                };
+                }
                 return bench_scaling(
                     &scenes.join("plate-cylinder.toml"),
                     &scaling,
                     scaling_steps,
-                    out,
                     write_matrix,
+                    &items,
+                    out.as_deref(),
+                );
+            }
+            if items.item.is_some() || items.list_items {
+                anyhow::bail!(
+                    "--item and --list-items split the --scaling study only: the work-precision benchmark and the head-to-head compare timings taken side by side on one machine"
                 );
             }
             // The plate-cylinder skip study times runs that write their
@@ -449,60 +457,22 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
             cases,
             max_steps,
             out,
+            items,
         } => {
-            use anm::study::stress;
-            let mut list = vec![];
-            let mut shells = vec![];
-            for name in &cases {
-                let path = scenes.join(format!("{name}.toml"));
-                match load(&path)? {
-                    (_, Some(sc)) => list.push(sc),
-                    (_, None) => shells.push((name.clone(), anm::scene::shell::load(&path)?)),
-                }
-            }
-            let mut cases = stress::stress(&list, &stress::full_axes(), max_steps);
-            cases.extend(stress::stress_shell(
-                &shells,
-                &stress::shell_axes(),
+            let spec = anm::study::sweep::Spec::Stress {
+                scenes,
+                cases,
                 max_steps,
-            ));
-            anm::output::create_dir(&out)?;
-            let md = anm::study::stress::markdown(&cases);
-            std::fs::write(out.join("stress.md"), &md)
-                .with_context(|| format!("writing {}", out.join("stress.md").display()))?;
-            let mut w = csv::Writer::from_path(out.join("stress.csv"))?;
-            w.write_record([
-                "scene",
-                "axis",
-                "value",
-                "verdict",
-                "stop",
-                "steps",
-                "max_relative_residual",
-                "wall_s",
-                "message",
-                "detail",
-            ])?;
-            for c in &cases {
-                w.write_record([
-                    c.scene.clone(),
-                    c.axis.to_string(),
-                    format!("{:e}", c.value),
-                    format!("{:?}", c.verdict),
-                    c.stop.clone(),
-                    c.steps.to_string(),
-                    format!("{:e}", c.residual),
-                    format!("{:e}", c.wall_s),
-                    c.message.clone(),
-                    c.detail.clone(),
-                ])?;
-            }
-            w.flush()?;
-            print!("{md}");
-            let failed = cases
-                .iter()
-                .any(|c| c.verdict == anm::study::stress::Verdict::Failed);
-            Ok(if failed {
+            };
+            sweep(&spec, &items, out.as_deref())
+        }
+        Command::Merge { dir } => {
+            use anm::study::sweep;
+            let merged = sweep::merge_dir(&dir, sweep::open)
+                .with_context(|| format!("merging the sweep in {}", dir.display()))?;
+            print!("{}", merged.markdown);
+            println!("\noutputs in {}", dir.display());
+            Ok(if merged.failed {
                 ExitCode::FAILURE
             } else {
                 ExitCode::SUCCESS
@@ -575,13 +545,46 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
     }
 }
 
+/// A sweep: its items (`--list-items`), one item (`--item K -o DIR`), or
+/// all of them in this process then the merge (exit 1 when the sweep's
+/// verdict is a failure, as for `anm merge`).
+fn sweep(
+    spec: &anm::study::sweep::Spec,
+    items: &ItemArgs,
+    out: Option<&std::path::Path>,
+) -> anyhow::Result<ExitCode> {
+    use anm::study::sweep;
+    let s = sweep::open(spec)?;
+    if items.list_items {
+        print!("{}", sweep::list(s.as_ref()));
+        return Ok(ExitCode::SUCCESS);
+    }
+    if let Some(k) = items.item {
+        let out = out.context("--item K writes DIR/items/K.json: give -o DIR")?;
+        let file = sweep::run_one(spec, s.as_ref(), k, out)?;
+        eprintln!("item {k}: {}", file.display());
+        return Ok(ExitCode::SUCCESS);
+    }
+    let merged = sweep::run_all(spec, s.as_ref(), out, sweep::open)?;
+    print!("{}", merged.markdown);
+    if let Some(out) = out {
+        println!("\noutputs in {}", out.display());
+    }
+    Ok(if merged.failed {
+        ExitCode::FAILURE
+    } else {
+        ExitCode::SUCCESS
+    })
+}
+
 /// The scaling study (`anm bench --scaling 40x4,80x8,...`).
 fn bench_scaling(
     template: &std::path::Path,
     sizes: &[String],
     steps: usize,
-    out: &std::path::Path,
     write_matrix: bool,
+    items: &ItemArgs,
+    out: Option<&std::path::Path>,
 ) -> anyhow::Result<ExitCode> {
     let parsed: Vec<(usize, usize)> = sizes
         .iter()
@@ -595,50 +598,13 @@ fn bench_scaling(
     if steps == 0 {
         anyhow::bail!("--scaling-steps must be >= 1");
     }
-    let exe = std::env::current_exe().context("locating the anm executable")?;
-    let rows = anm::study::scaling::run(&exe, template, &parsed, steps, out, write_matrix, |r| {
-        eprintln!(
-            "{}x{}: {} unknowns, {} steps in {:.2} s, peak {:.0} MiB ({})",
-            r.nx,
-            r.ny,
-            r.dofs,
-            r.steps,
-            r.wall_s,
-            r.peak_rss_bytes / 1048576.0,
-            r.stop
-        )
-    })?;
-    let md = anm::study::scaling::markdown(&rows);
-    std::fs::write(out.join("scaling.md"), &md)
-        .with_context(|| format!("writing {}", out.join("scaling.md").display()))?;
-    print!("{md}");
-    if write_matrix {
-        let mut text = String::new();
-        for r in &rows {
-            let mtx = out
-                .join(format!("run-{}x{}", r.nx, r.ny))
-                .join("tangent.mtx");
-            eprintln!("{}x{}: factoring {} ...", r.nx, r.ny, mtx.display());
-            let ours = anm::study::factor::compare(
-                &exe,
-                &mtx,
-                &[("ldlt", 1), ("ldlt", 2), ("lblt", 1), ("lu", 1)],
-            )?;
-            text += &format!(
-                "\n### {}x{} strip: initial tangent, {} unknowns, {} stored entries\n\n{}",
-                r.nx,
-                r.ny,
-                r.dofs,
-                ours.first().map_or(0, |o| o.entries),
-                anm::study::factor::markdown(&ours)
-            );
-        }
-        std::fs::write(out.join("factor.md"), &text)
-            .with_context(|| format!("writing {}", out.join("factor.md").display()))?;
-        print!("{text}");
-    }
-    println!("outputs in {}", out.display());
-    Ok(ExitCode::SUCCESS)
+    let spec = anm::study::sweep::Spec::Scaling {
+        template: template.to_path_buf(),
+        sizes: parsed,
+        steps,
+        write_matrix,
+    };
+    sweep(&spec, items, out)
 }
 
 /// The plate-cylinder work-precision benchmark of one scene: the rows, and

@@ -11,13 +11,15 @@
 //! trajectory, and the cost (steps, factorizations, wall time).
 
 use super::pool;
+use super::sweep::{self, Merged, Sweep, exact, exact_opt, exact_rows};
 use crate::error::{Error, Result};
 use crate::model::friction_run::{FrictionRun, run};
 use crate::output::create_dir;
 use crate::output::plot::{Curve, Panel, draw};
 use crate::scene::Kind;
 use crate::scene::friction::{FrictionScene, Obstacle};
-use std::path::Path;
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
 
 /// The values to sweep, per parameter.
 #[derive(Clone, Debug, Default)]
@@ -93,7 +95,92 @@ pub fn with_parameter(scene: &FrictionScene, parameter: &str, value: f64) -> Res
     Ok(s)
 }
 
-fn key_output(run: &FrictionRun) -> (&'static str, f64) {
+/// What the audit keeps of one run: enough to rebuild every row, table and
+/// plot (the item file of `anm audit --item K`).
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct RunRecord {
+    pub kind: String,
+    pub columns: Vec<String>,
+    #[serde(with = "exact_rows")]
+    pub history: Vec<Vec<f64>>,
+    pub stop: String,
+    #[serde(with = "exact_opt")]
+    pub t_stop: Option<f64>,
+    #[serde(with = "exact_opt")]
+    pub t_singular_estimate: Option<f64>,
+    pub steps: usize,
+    pub factorizations: usize,
+    #[serde(with = "exact")]
+    pub wall_s: f64,
+}
+
+impl From<&FrictionRun> for RunRecord {
+    fn from(r: &FrictionRun) -> Self {
+        RunRecord {
+            kind: r.kind.clone(),
+            columns: r.columns.clone(),
+            history: r.history.clone(),
+            stop: r.stop.reason.clone(),
+            t_stop: r.stop.t,
+            t_singular_estimate: r.t_singular_estimate,
+            steps: r.stats.steps,
+            factorizations: r.stats.factorizations,
+            wall_s: r.wall_s,
+        }
+    }
+}
+
+/// One item of the audit: a parameter value and its run (or why it failed).
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct AuditItem {
+    pub parameter: String,
+    #[serde(with = "exact")]
+    pub value: f64,
+    pub outcome: std::result::Result<RunRecord, String>,
+}
+
+/// The parameters in sweep order (the order of the items and the rows).
+const PARAMETERS: [&str; 4] = ["omega", "zeta", "eta", "penalty"];
+
+/// The items of the sweep, in order: each parameter's values in turn; every
+/// value validated before any run.
+pub fn jobs(
+    scene: &FrictionScene,
+    sweeps: &Sweeps,
+) -> Result<Vec<(&'static str, f64, FrictionScene)>> {
+    let mut jobs = vec![];
+    for (name, values) in
+        PARAMETERS
+            .into_iter()
+            .zip([&sweeps.omega, &sweeps.zeta, &sweeps.eta, &sweeps.penalty])
+    {
+        for &v in values {
+            jobs.push((name, v, with_parameter(scene, name, v)?));
+        }
+    }
+    Ok(jobs)
+}
+
+/// The label of an item: `omega=1e-1`.
+pub fn label(parameter: &str, value: f64) -> String {
+    format!("{parameter}={value:e}")
+}
+
+/// Runs one item (a panic becomes a recorded failure).
+pub fn run_item(parameter: &str, value: f64, scene: &FrictionScene) -> AuditItem {
+    let outcome = match sweep::catch(|| run(scene, None, false)) {
+        Ok(Ok(r)) => Ok(RunRecord::from(&r)),
+        Ok(Err(e)) => Err(e.to_string()),
+        Err(panic) => Err(format!("panicked: {panic}")),
+    };
+    AuditItem {
+        parameter: parameter.to_string(),
+        value,
+        outcome,
+    }
+}
+
+fn key_output(run: &RunRecord) -> (&'static str, f64) {
     let col = |name: &str| run.columns.iter().position(|c| c == name).expect("column");
     match run.kind.as_str() {
         "friction-1d" => (
@@ -111,14 +198,14 @@ fn key_output(run: &FrictionRun) -> (&'static str, f64) {
         }
         _ => (
             "breakdown time t*",
-            run.t_singular_estimate.or(run.stop.t).unwrap_or(f64::NAN),
+            run.t_singular_estimate.or(run.t_stop).unwrap_or(f64::NAN),
         ),
     }
 }
 
 /// max_t |u - u_ref| / max_t |u_ref| over the displacement columns, on the
 /// output times both runs reached.
-fn trajectory_deviation(run: &FrictionRun, reference: &[(f64, Vec<f64>)]) -> f64 {
+fn trajectory_deviation(run: &RunRecord, reference: &[(f64, Vec<f64>)]) -> f64 {
     let cols: Vec<usize> = run
         .columns
         .iter()
@@ -178,32 +265,32 @@ fn friction_1d_unregularized(scene: &FrictionScene) -> Option<Vec<(f64, Vec<f64>
 
 /// Runs the sweeps (in parallel) and returns one row per run.
 pub fn audit(scene: &FrictionScene, sweeps: &Sweeps) -> Result<Vec<AuditRow>> {
-    let mut jobs = vec![];
-    for (name, values) in [
-        ("omega", &sweeps.omega),
-        ("zeta", &sweeps.zeta),
-        ("eta", &sweeps.eta),
-        ("penalty", &sweeps.penalty),
-    ] {
-        for &v in values {
-            jobs.push((name, v, with_parameter(scene, name, v)?));
-        }
-    }
-    let runs = pool::map(&jobs, |(_, _, s)| run(s, None, false));
+    let jobs = jobs(scene, sweeps)?;
+    let items: Vec<AuditItem> = pool::map(&jobs, |(name, v, s)| run_item(name, *v, s))
+        .into_iter()
+        .zip(&jobs)
+        .map(|(r, (name, v, _))| {
+            r.unwrap_or_else(|panic| AuditItem {
+                parameter: name.to_string(),
+                value: *v,
+                outcome: Err(format!("panicked: {panic}")),
+            })
+        })
+        .collect();
+    rows(scene, &items)
+}
+
+/// The rows from the items' results (in sweep order): deviations from each
+/// sweep's reference. A failed run fails the audit, naming it.
+pub fn rows(scene: &FrictionScene, items: &[AuditItem]) -> Result<Vec<AuditRow>> {
     let mut rows = vec![];
-    for (name, _) in [("omega", ()), ("zeta", ()), ("eta", ()), ("penalty", ())] {
-        let group: Vec<(f64, &FrictionRun)> = jobs
+    for name in PARAMETERS {
+        let group: Vec<(f64, &RunRecord)> = items
             .iter()
-            .zip(&runs)
-            .filter(|((n, _, _), _)| *n == name)
-            .map(|((_, v, _), r)| match r {
-                Ok(Ok(run)) => Ok((*v, run)),
-                Ok(Err(e)) => Err(Error::study("audit", format!("{name} = {v}"), e)),
-                Err(panic) => Err(Error::study(
-                    "audit",
-                    format!("{name} = {v}"),
-                    format!("panicked: {panic}"),
-                )),
+            .filter(|it| it.parameter == name)
+            .map(|it| match &it.outcome {
+                Ok(run) => Ok((it.value, run)),
+                Err(e) => Err(Error::study("audit", format!("{name} = {}", it.value), e)),
             })
             .collect::<Result<_>>()?;
         if group.is_empty() {
@@ -211,7 +298,7 @@ pub fn audit(scene: &FrictionScene, sweeps: &Sweeps) -> Result<Vec<AuditRow>> {
         }
         // The least regularized run: the smallest omega, zeta, eta, but the
         // largest penalty K (eq. 3 tends to the exact law as K grows).
-        let least = |a: &&(f64, &FrictionRun), b: &&(f64, &FrictionRun)| {
+        let least = |a: &&(f64, &RunRecord), b: &&(f64, &RunRecord)| {
             if name == "penalty" {
                 b.0.total_cmp(&a.0)
             } else {
@@ -244,20 +331,71 @@ pub fn audit(scene: &FrictionScene, sweeps: &Sweeps) -> Result<Vec<AuditRow>> {
             rows.push(AuditRow {
                 parameter: name,
                 value: v,
-                stop: r.stop.reason.clone(),
-                t_stop: r.stop.t.unwrap_or(f64::NAN),
+                stop: r.stop.clone(),
+                t_stop: r.t_stop.unwrap_or(f64::NAN),
                 key_name,
                 key,
                 key_deviation: (key - ref_key).abs() / ref_key.abs().max(f64::MIN_POSITIVE),
                 reference: ref_name.clone(),
                 trajectory_deviation: trajectory_deviation(r, &ref_traj),
-                steps: r.stats.steps,
-                factorizations: r.stats.factorizations,
+                steps: r.steps,
+                factorizations: r.factorizations,
                 wall_s: r.wall_s,
             });
         }
     }
     Ok(rows)
+}
+
+/// The audit as a sweep (`anm audit`, friction scenes): one item per
+/// parameter value; the merge writes audit.csv, audit.md, audit.svg.
+pub struct FrictionAudit {
+    pub scene: FrictionScene,
+    jobs: Vec<(&'static str, f64, FrictionScene)>,
+}
+
+impl FrictionAudit {
+    /// Validates every value; an error when there is nothing to sweep.
+    pub fn new(scene: FrictionScene, sweeps: &Sweeps) -> Result<Self> {
+        let jobs = jobs(&scene, sweeps)?;
+        if jobs.is_empty() {
+            return Err(Error::Invalid {
+                file: scene.file.clone(),
+                key: "audit".into(),
+                problem: "nothing to sweep: give at least one of --omega, --zeta, --eta, --penalty"
+                    .into(),
+            });
+        }
+        Ok(FrictionAudit { scene, jobs })
+    }
+}
+
+impl Sweep for FrictionAudit {
+    fn labels(&self) -> Vec<String> {
+        self.jobs.iter().map(|(n, v, _)| label(n, *v)).collect()
+    }
+    fn inputs(&self) -> Vec<PathBuf> {
+        vec![self.scene.file.clone()]
+    }
+    fn run_item(&self, k: usize, _dir: Option<&Path>) -> Result<serde_json::Value> {
+        let (name, v, s) = &self.jobs[k];
+        sweep::encode(&run_item(name, *v, s))
+    }
+    fn merge(&self, items: &[serde_json::Value], dir: Option<&Path>) -> Result<Merged> {
+        let items: Vec<AuditItem> = items
+            .iter()
+            .enumerate()
+            .map(|(k, v)| sweep::decode(k, v))
+            .collect::<Result<_>>()?;
+        let rows = rows(&self.scene, &items)?;
+        if let Some(dir) = dir {
+            write(&self.scene, &rows, dir)?;
+        }
+        Ok(Merged {
+            markdown: markdown(&self.scene, &rows),
+            failed: false,
+        })
+    }
 }
 
 const HEADER: [&str; 11] = [

@@ -7,13 +7,13 @@
 use std::path::Path;
 use std::time::Instant;
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
 use crate::linalg::{Choice, LinearSolver, matrix_market};
 
 /// The measurements of one backend on one matrix.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct FactorReport {
     pub matrix: String,
     pub n: usize,

@@ -13,5 +13,6 @@ pub mod scaling;
 pub mod shell_audit;
 pub mod shell_check;
 pub mod stress;
+pub mod sweep;
 pub mod target;
 pub mod timing;

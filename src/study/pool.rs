@@ -3,6 +3,16 @@
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
+/// Runs `f`, turning a panic into `Err(message)`.
+pub fn catch<R>(f: impl FnOnce() -> R) -> Result<R, String> {
+    std::panic::catch_unwind(std::panic::AssertUnwindSafe(f)).map_err(|e| {
+        e.downcast_ref::<String>()
+            .cloned()
+            .or_else(|| e.downcast_ref::<&str>().map(|s| s.to_string()))
+            .unwrap_or_else(|| "panic".into())
+    })
+}
+
 /// Maps `f` over `items` in parallel, keeping the order; a panicking job
 /// becomes `Err(message)` instead of taking the process down.
 pub fn map<T: Sync, R: Send>(items: &[T], f: impl Fn(&T) -> R + Sync) -> Vec<Result<R, String>> {
@@ -21,13 +31,7 @@ pub fn map<T: Sync, R: Send>(items: &[T], f: impl Fn(&T) -> R + Sync) -> Vec<Res
                     if i >= items.len() {
                         break;
                     }
-                    let r = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| f(&items[i])))
-                        .map_err(|e| {
-                            e.downcast_ref::<String>()
-                                .cloned()
-                                .or_else(|| e.downcast_ref::<&str>().map(|s| s.to_string()))
-                                .unwrap_or_else(|| "panic".into())
-                        });
+                    let r = catch(|| f(&items[i]));
                     out.lock().expect("result lock")[i] = Some(r);
                 }
             });

@@ -7,9 +7,12 @@
 //! (assembly, factorization, solves, series terms) and peak memory; the
 //! exponents b of t = c n^b are fitted by least squares in log-log.
 
+use super::sweep::{self, Merged, Sweep};
 use crate::error::{Error, Result};
 use crate::mesh::{gmsh_write, structured};
 use crate::output::create_dir;
+use super::factor::FactorReport;
+use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -45,8 +48,7 @@ fn io(file: &Path) -> impl FnOnce(std::io::Error) -> Error + '_ {
 }
 
 /// The scene `template` (a plate-cylinder TOML) on the nx × ny strip mesh,
-/// stopped after `steps` steps, without VTK or plots, with its initial
-/// tangent as tangent.mtx if `write_matrix`; written into `dir`.
+/// stopped after `steps` steps, without VTK or plots; written into `dir`.
 /// Returns the scene file and its truncation order.
 fn write_case(
     template: &Path,
@@ -70,13 +72,14 @@ fn write_case(
             t.insert(key.into(), value);
         }
     };
+    // The mesh sits beside the scene (paths in a scene are relative to it);
+    // the template's [[fix]] group "clamp" and [contact] group "strip" name
+    // the physical groups written above.
     set(
         "mesh",
         "file",
-        toml::Value::String(msh.display().to_string()),
+        toml::Value::String(format!("strip-{nx}x{ny}.msh")),
     );
-    // The written mesh carries the physical groups `clamp` (edge s0) and
-    // `strip` (every node) that the template's [[fix]] and [contact] name.
     set("solver", "max_steps", toml::Value::Integer(steps as i64));
     set("output", "vtk_every", toml::Value::Integer(0));
     set("output", "plot", toml::Value::Boolean(false));
@@ -96,6 +99,101 @@ fn write_case(
     Ok((path, order))
 }
 
+/// The result of one size, the item of `anm bench --scaling ... --item K`:
+/// the child run's summary.json verbatim, and what its row needs besides.
+/// Everything measured per size belongs here (or in the summary), so that
+/// the merged table is the table of the single-process run.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct SizeRun {
+    pub nx: usize,
+    pub ny: usize,
+    /// Truncation order N of the scene.
+    pub order: usize,
+    /// The text of the child run's summary.json.
+    pub summary: String,
+    /// With --write-matrix: the initial tangent factored by each backend
+    /// (`anm factor`, one process each).
+    #[serde(default)]
+    pub factor: Vec<FactorReport>,
+}
+
+/// Runs the nx × ny size in a child `exe run` process (scene, mesh and run
+/// folder in `dir`) and reads its summary.json.
+pub fn run_size(
+    exe: &Path,
+    template: &Path,
+    (nx, ny): (usize, usize),
+    steps: usize,
+    dir: &Path,
+    write_matrix: bool,
+) -> Result<SizeRun> {
+    create_dir(dir)?;
+    let (scene, order) = write_case(template, nx, ny, steps, dir, write_matrix)?;
+    let out = dir.join(format!("run-{nx}x{ny}"));
+    let status = Command::new(exe)
+        .arg("run")
+        .arg(&scene)
+        .arg("-o")
+        .arg(&out)
+        .arg("--quiet")
+        .output()
+        .map_err(io(exe))?;
+    let summary = out.join("summary.json");
+    let text = std::fs::read_to_string(&summary).map_err(|e| {
+        Error::study(
+            "scaling",
+            scene.display().to_string(),
+            format!(
+                "no summary ({e}); the run printed: {}",
+                String::from_utf8_lossy(&status.stderr)
+            ),
+        )
+    })?;
+    let factor = if write_matrix {
+        let mtx = out.join("tangent.mtx");
+        eprintln!("{nx}x{ny}: factoring {} ...", mtx.display());
+        super::factor::compare(exe, &mtx, FACTOR_CONFIGS)?
+    } else {
+        vec![]
+    };
+    Ok(SizeRun {
+        nx,
+        ny,
+        order,
+        summary: text,
+        factor,
+    })
+}
+
+/// The table row of one size, from its child run's summary.
+pub fn row(size: &SizeRun) -> Result<ScalingRow> {
+    let v: serde_json::Value = serde_json::from_str(&size.summary).map_err(|e| Error::Parse {
+        file: PathBuf::from(format!("run-{}x{}/summary.json", size.nx, size.ny)),
+        message: e.to_string(),
+    })?;
+    let num = |k: &str| v["stats"][k].as_f64().unwrap_or(f64::NAN);
+    let steps_done = v["steps"].as_u64().unwrap_or(0) as usize;
+    let per = |k: &str| num(k) / steps_done.max(1) as f64;
+    Ok(ScalingRow {
+        nx: size.nx,
+        ny: size.ny,
+        dofs: v["dofs"].as_u64().unwrap_or(0) as usize,
+        steps: steps_done,
+        factorizations: v["factorizations"].as_u64().unwrap_or(0) as usize,
+        solves: v["solves"].as_u64().unwrap_or(0) as usize,
+        order: size.order,
+        wall_s: v["wall_s"].as_f64().unwrap_or(f64::NAN),
+        per_step: [
+            per("assembly_s"),
+            per("factorization_s"),
+            per("solve_s"),
+            per("series_s"),
+        ],
+        peak_rss_bytes: v["peak_rss_bytes"].as_f64().unwrap_or(f64::NAN),
+        stop: v["stop"]["reason"].as_str().unwrap_or("?").to_string(),
+    })
+}
+
 /// Runs each size in a child `exe run` process and reads its summary.json.
 pub fn run(
     exe: &Path,
@@ -108,57 +206,117 @@ pub fn run(
 ) -> Result<Vec<ScalingRow>> {
     create_dir(dir)?;
     let mut rows = vec![];
-    for &(nx, ny) in sizes {
-        let (scene, order) = write_case(template, nx, ny, steps, dir, write_matrix)?;
-        let out = dir.join(format!("run-{nx}x{ny}"));
-        let status = Command::new(exe)
-            .arg("run")
-            .arg(&scene)
-            .arg("-o")
-            .arg(&out)
-            .arg("--quiet")
-            .output()
-            .map_err(io(exe))?;
-        let summary = out.join("summary.json");
-        let text = std::fs::read_to_string(&summary).map_err(|e| {
-            Error::study(
-                "scaling",
-                scene.display().to_string(),
-                format!(
-                    "no summary ({e}); the run printed: {}",
-                    String::from_utf8_lossy(&status.stderr)
-                ),
-            )
-        })?;
-        let v: serde_json::Value = serde_json::from_str(&text).map_err(|e| Error::Parse {
-            file: summary.clone(),
-            message: e.to_string(),
-        })?;
-        let num = |k: &str| v["stats"][k].as_f64().unwrap_or(f64::NAN);
-        let steps_done = v["steps"].as_u64().unwrap_or(0) as usize;
-        let per = |k: &str| num(k) / steps_done.max(1) as f64;
-        let row = ScalingRow {
-            nx,
-            ny,
-            dofs: v["dofs"].as_u64().unwrap_or(0) as usize,
-            steps: steps_done,
-            factorizations: v["factorizations"].as_u64().unwrap_or(0) as usize,
-            solves: v["solves"].as_u64().unwrap_or(0) as usize,
-            order,
-            wall_s: v["wall_s"].as_f64().unwrap_or(f64::NAN),
-            per_step: [
-                per("assembly_s"),
-                per("factorization_s"),
-                per("solve_s"),
-                per("series_s"),
-            ],
-            peak_rss_bytes: v["peak_rss_bytes"].as_f64().unwrap_or(f64::NAN),
-            stop: v["stop"]["reason"].as_str().unwrap_or("?").to_string(),
-        };
-        progress(&row);
-        rows.push(row);
+    for &size in sizes {
+        let r = row(&run_size(exe, template, size, steps, dir, write_matrix)?)?;
+        progress(&r);
+        rows.push(r);
     }
     Ok(rows)
+}
+
+/// The scaling study as a sweep (`anm bench --scaling`): one item per size,
+/// run one after the other in one process (each measures time and peak
+/// memory); the merge writes scaling.md.
+pub struct ScalingSweep {
+    pub exe: PathBuf,
+    pub template: PathBuf,
+    pub sizes: Vec<(usize, usize)>,
+    pub steps: usize,
+    pub write_matrix: bool,
+}
+
+/// Backends and threads by which `--write-matrix` factors each tangent.
+const FACTOR_CONFIGS: &[(&str, usize)] = &[("ldlt", 1), ("ldlt", 2), ("lblt", 1), ("lu", 1)];
+
+/// The factorization tables of the sizes factored with --write-matrix.
+fn factor_markdown(sizes: &[SizeRun]) -> String {
+    let mut text = String::new();
+    for s in sizes.iter().filter(|s| !s.factor.is_empty()) {
+        text += &format!(
+            "\n### {}x{} strip: initial tangent, {} unknowns, {} stored entries (run-{}x{}/tangent.mtx)\n\n{}",
+            s.nx,
+            s.ny,
+            s.factor[0].n,
+            s.factor[0].entries,
+            s.nx,
+            s.ny,
+            super::factor::markdown(&s.factor)
+        );
+    }
+    text
+}
+
+/// The progress line of one size (stderr).
+pub fn progress_line(r: &ScalingRow) -> String {
+    format!(
+        "{}x{}: {} unknowns, {} steps in {:.2} s, peak {:.0} MiB ({})",
+        r.nx,
+        r.ny,
+        r.dofs,
+        r.steps,
+        r.wall_s,
+        r.peak_rss_bytes / 1048576.0,
+        r.stop
+    )
+}
+
+impl Sweep for ScalingSweep {
+    fn labels(&self) -> Vec<String> {
+        self.sizes
+            .iter()
+            .map(|(nx, ny)| format!("{nx}x{ny}"))
+            .collect()
+    }
+    fn inputs(&self) -> Vec<PathBuf> {
+        vec![self.template.clone()]
+    }
+    fn concurrent(&self) -> bool {
+        false
+    }
+    fn run_item(&self, k: usize, dir: Option<&Path>) -> Result<serde_json::Value> {
+        let dir = dir.ok_or_else(|| {
+            Error::study(
+                "scaling",
+                self.labels()[k].clone(),
+                "needs an output folder",
+            )
+        })?;
+        let size = run_size(
+            &self.exe,
+            &self.template,
+            self.sizes[k],
+            self.steps,
+            dir,
+            self.write_matrix,
+        )?;
+        eprintln!("{}", progress_line(&row(&size)?));
+        sweep::encode(&size)
+    }
+    fn merge(&self, items: &[serde_json::Value], dir: Option<&Path>) -> Result<Merged> {
+        let sizes = items
+            .iter()
+            .enumerate()
+            .map(|(k, v)| sweep::decode::<SizeRun>(k, v))
+            .collect::<Result<Vec<_>>>()?;
+        let rows = sizes.iter().map(row).collect::<Result<Vec<_>>>()?;
+        let mut md = markdown(&rows);
+        if let Some(dir) = dir {
+            let file = dir.join("scaling.md");
+            std::fs::write(&file, &md).map_err(io(&file))?;
+        }
+        let factored = factor_markdown(&sizes);
+        if !factored.is_empty() {
+            if let Some(dir) = dir {
+                let file = dir.join("factor.md");
+                std::fs::write(&file, &factored).map_err(io(&file))?;
+            }
+            md += &factored;
+        }
+        Ok(Merged {
+            markdown: md,
+            failed: false,
+        })
+    }
 }
 
 /// Least-squares slope b of log y = a + b log x.

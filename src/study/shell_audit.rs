@@ -13,12 +13,14 @@
 use super::audit::Sweeps;
 use super::pool;
 use super::shell_check::{ShellCheck, check, with_grid_snapshots};
+use super::sweep::{self, Merged, Sweep, exact, exact_opt, exact_opt3, exact_rows};
 use crate::error::{Error, Result};
 use crate::output::create_dir;
 use crate::output::plot::{Curve, Panel, draw};
 use crate::run::{RunReport, run_loaded};
 use crate::scene::shell::ShellScene;
-use std::path::Path;
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
 
 /// One audited shell run.
 #[derive(Clone, Debug)]
@@ -124,8 +126,82 @@ pub fn key_columns(scene: &ShellScene) -> Result<(usize, usize)> {
     ))
 }
 
-/// Runs the eta and penalty sweeps (in parallel) and returns one row per run.
-pub fn audit(scene: &ShellScene, sweeps: &Sweeps) -> Result<Vec<ShellAuditRow>> {
+/// What the audit keeps of one shell run and its check: enough to rebuild
+/// every row, table and plot (the item file of `anm audit --item K`).
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct ShellRunRecord {
+    #[serde(with = "exact_rows")]
+    pub history: Vec<Vec<f64>>,
+    pub stop: String,
+    #[serde(with = "exact_opt")]
+    pub lambda_stop: Option<f64>,
+    pub message: Option<String>,
+    pub far_nodes_skipped: bool,
+    #[serde(with = "exact")]
+    pub skipped_pull_bound: f64,
+    pub steps: usize,
+    pub factorizations: usize,
+    #[serde(with = "exact")]
+    pub wall_s: f64,
+    #[serde(with = "exact")]
+    pub max_residual: f64,
+    #[serde(with = "exact")]
+    pub worst_lambda: f64,
+    pub points: usize,
+    #[serde(with = "exact_opt3")]
+    pub contact_force: Option<[f64; 3]>,
+    #[serde(with = "exact_opt3")]
+    pub clamp_force: Option<[f64; 3]>,
+    #[serde(with = "exact_opt")]
+    pub balance: Option<f64>,
+}
+
+impl ShellRunRecord {
+    fn new(r: &RunReport, c: &ShellCheck) -> Self {
+        ShellRunRecord {
+            history: r.history.clone(),
+            stop: r.stop.reason.clone(),
+            lambda_stop: r.stop.lambda,
+            message: r.stop.message.clone(),
+            far_nodes_skipped: r.far_nodes_skipped,
+            skipped_pull_bound: r.skipped_pull_bound,
+            steps: r.steps,
+            factorizations: r.factorizations,
+            wall_s: r.wall_s,
+            max_residual: c.max_residual,
+            worst_lambda: c.worst_lambda,
+            points: c.points,
+            contact_force: c.contact_force,
+            clamp_force: c.clamp_force,
+            balance: c.balance,
+        }
+    }
+
+    fn check(&self) -> ShellCheck {
+        ShellCheck {
+            max_residual: self.max_residual,
+            worst_lambda: self.worst_lambda,
+            points: self.points,
+            contact_force: self.contact_force,
+            clamp_force: self.clamp_force,
+            balance: self.balance,
+        }
+    }
+}
+
+/// One item of the shell audit: a parameter value and its run (or why it
+/// failed).
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct ShellAuditItem {
+    pub parameter: String,
+    #[serde(with = "exact")]
+    pub value: f64,
+    pub outcome: std::result::Result<ShellRunRecord, String>,
+}
+
+/// The items of the sweep, in order (eta values, then K values); friction
+/// sweeps are rejected and every value is validated before any run.
+pub fn jobs(scene: &ShellScene, sweeps: &Sweeps) -> Result<Vec<(&'static str, f64, ShellScene)>> {
     for (name, values) in [("omega", &sweeps.omega), ("zeta", &sweeps.zeta)] {
         if !values.is_empty() {
             with_parameter(scene, name, values[0])?;
@@ -141,32 +217,63 @@ pub fn audit(scene: &ShellScene, sweeps: &Sweeps) -> Result<Vec<ShellAuditRow>> 
             ));
         }
     }
-    let runs = pool::map(&jobs, |(_, _, s)| {
-        let report = run_loaded(s, None, false)?;
-        let checked = check(s, &report)?;
-        Ok::<_, Error>((report, checked))
-    });
+    Ok(jobs)
+}
+
+/// Runs one item and its check (a panic becomes a recorded failure).
+pub fn run_item(parameter: &str, value: f64, scene: &ShellScene) -> ShellAuditItem {
+    let outcome = match sweep::catch(|| {
+        let report = run_loaded(scene, None, false)?;
+        let checked = check(scene, &report)?;
+        Ok::<_, Error>(ShellRunRecord::new(&report, &checked))
+    }) {
+        Ok(Ok(r)) => Ok(r),
+        Ok(Err(e)) => Err(e.to_string()),
+        Err(panic) => Err(format!("panicked: {panic}")),
+    };
+    ShellAuditItem {
+        parameter: parameter.to_string(),
+        value,
+        outcome,
+    }
+}
+
+/// Runs the eta and penalty sweeps (in parallel) and returns one row per run.
+pub fn audit(scene: &ShellScene, sweeps: &Sweeps) -> Result<Vec<ShellAuditRow>> {
+    let jobs = jobs(scene, sweeps)?;
+    let items: Vec<ShellAuditItem> = pool::map(&jobs, |(name, v, s)| run_item(name, *v, s))
+        .into_iter()
+        .zip(&jobs)
+        .map(|(r, (name, v, _))| {
+            r.unwrap_or_else(|panic| ShellAuditItem {
+                parameter: name.to_string(),
+                value: *v,
+                outcome: Err(format!("panicked: {panic}")),
+            })
+        })
+        .collect();
+    rows(scene, &items)
+}
+
+/// The rows from the items' results (in sweep order): deviations from the
+/// least regularized run of each sweep. A failed run fails the audit,
+/// naming it.
+pub fn rows(scene: &ShellScene, items: &[ShellAuditItem]) -> Result<Vec<ShellAuditRow>> {
     let mut rows = vec![];
     for name in ["eta", "penalty"] {
-        let group: Vec<(f64, &RunReport, &ShellCheck)> = jobs
+        let group: Vec<(f64, &ShellRunRecord)> = items
             .iter()
-            .zip(&runs)
-            .filter(|((n, _, _), _)| *n == name)
-            .map(|((_, v, _), r)| match r {
-                Ok(Ok((run, c))) => Ok((*v, run, c)),
-                Ok(Err(e)) => Err(Error::study("audit", format!("{name} = {v}"), e)),
-                Err(panic) => Err(Error::study(
-                    "audit",
-                    format!("{name} = {v}"),
-                    format!("panicked: {panic}"),
-                )),
+            .filter(|it| it.parameter == name)
+            .map(|it| match &it.outcome {
+                Ok(run) => Ok((it.value, run)),
+                Err(e) => Err(Error::study("audit", format!("{name} = {}", it.value), e)),
             })
             .collect::<Result<_>>()?;
         if group.is_empty() {
             continue;
         }
         // The least regularized run: the smallest eta, the largest K.
-        let (ref_value, reference, _) = *group
+        let (ref_value, reference) = *group
             .iter()
             .min_by(|a, b| {
                 if name == "penalty" {
@@ -178,7 +285,7 @@ pub fn audit(scene: &ShellScene, sweeps: &Sweeps) -> Result<Vec<ShellAuditRow>> 
             .expect("non-empty");
         let (key_col, contact_col) = key_columns(scene)?;
         let end = scene.solver.lambda_end;
-        let at_end = |r: &RunReport, col: usize| {
+        let at_end = |r: &ShellRunRecord, col: usize| {
             r.history
                 .iter()
                 .find(|row| (row[0] - end).abs() < 1e-9)
@@ -192,7 +299,7 @@ pub fn audit(scene: &ShellScene, sweeps: &Sweeps) -> Result<Vec<ShellAuditRow>> 
             .fold(0.0, f64::max)
             .max(f64::MIN_POSITIVE);
         let label = if name == "penalty" { "K" } else { "eta" };
-        for (v, r, c) in group {
+        for (v, r) in group {
             let (uz, rn) = (at_end(r, key_col), at_end(r, contact_col));
             let mut traj: f64 = 0.0;
             for (a, b) in r.history.iter().zip(&reference.history) {
@@ -205,16 +312,16 @@ pub fn audit(scene: &ShellScene, sweeps: &Sweeps) -> Result<Vec<ShellAuditRow>> 
             rows.push(ShellAuditRow {
                 parameter: name,
                 value: v,
-                stop: r.stop.reason.clone(),
-                lambda_stop: r.stop.lambda.unwrap_or(f64::NAN),
-                message: r.stop.message.clone(),
+                stop: r.stop.clone(),
+                lambda_stop: r.lambda_stop.unwrap_or(f64::NAN),
+                message: r.message.clone(),
                 key: uz,
                 key_deviation: (uz - uz_ref).abs() / uz_ref.abs(),
                 contact: rn,
                 contact_deviation: (rn - rn_ref).abs() / rn_ref.abs(),
                 trajectory_deviation: traj,
                 reference: format!("run with {label} = {ref_value:e}"),
-                check: c.clone(),
+                check: r.check(),
                 far_nodes_skipped: r.far_nodes_skipped,
                 skipped_pull_bound: r.skipped_pull_bound,
                 steps: r.steps,
@@ -224,6 +331,60 @@ pub fn audit(scene: &ShellScene, sweeps: &Sweeps) -> Result<Vec<ShellAuditRow>> 
         }
     }
     Ok(rows)
+}
+
+/// The shell audit as a sweep (`anm audit` on a shell scene): one item per
+/// eta or K value; the merge writes audit.csv, audit.md, audit.svg.
+pub struct ShellAudit {
+    pub scene: ShellScene,
+    jobs: Vec<(&'static str, f64, ShellScene)>,
+}
+
+impl ShellAudit {
+    /// Validates every value; an error when there is nothing to sweep.
+    pub fn new(scene: ShellScene, sweeps: &Sweeps) -> Result<Self> {
+        let jobs = jobs(&scene, sweeps)?;
+        if jobs.is_empty() {
+            return Err(Error::Invalid {
+                file: scene.file.clone(),
+                key: "audit".into(),
+                problem: "nothing to sweep: give at least one of --eta, --penalty (a shell scene is frictionless)".into(),
+            });
+        }
+        key_columns(&scene)?;
+        Ok(ShellAudit { scene, jobs })
+    }
+}
+
+impl Sweep for ShellAudit {
+    fn labels(&self) -> Vec<String> {
+        self.jobs
+            .iter()
+            .map(|(n, v, _)| super::audit::label(n, *v))
+            .collect()
+    }
+    fn inputs(&self) -> Vec<PathBuf> {
+        vec![self.scene.file.clone()]
+    }
+    fn run_item(&self, k: usize, _dir: Option<&Path>) -> Result<serde_json::Value> {
+        let (name, v, s) = &self.jobs[k];
+        sweep::encode(&run_item(name, *v, s))
+    }
+    fn merge(&self, items: &[serde_json::Value], dir: Option<&Path>) -> Result<Merged> {
+        let items: Vec<ShellAuditItem> = items
+            .iter()
+            .enumerate()
+            .map(|(k, v)| sweep::decode(k, v))
+            .collect::<Result<_>>()?;
+        let rows = rows(&self.scene, &items)?;
+        if let Some(dir) = dir {
+            write(&self.scene, &rows, dir)?;
+        }
+        Ok(Merged {
+            markdown: markdown(&self.scene, &rows),
+            failed: false,
+        })
+    }
 }
 
 const HEADER: [&str; 22] = [

@@ -17,11 +17,16 @@
 use super::check::max_relative_residual;
 use super::pool;
 use super::shell_check::{check, with_grid_snapshots};
+use super::sweep::{self, Merged, Sweep, exact};
+use crate::error::{Error, Result};
 use crate::model::friction_run::run;
+use crate::output::create_dir;
 use crate::run::run_loaded;
 use crate::scene::Kind;
 use crate::scene::friction::FrictionScene;
 use crate::scene::shell::ShellScene;
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
 
 /// Relative residual an output row may have.
 pub const TOLERANCE: f64 = 1e-6;
@@ -40,23 +45,27 @@ pub fn canonical_uz_a(name: &str) -> Option<f64> {
     }
 }
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub enum Verdict {
     Met,
     Diagnosed,
     Failed,
 }
 
-#[derive(Clone, Debug)]
+/// One run of the matrix: also the result of one item of `anm stress --item K`.
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct StressCase {
     pub scene: String,
-    pub axis: &'static str,
+    pub axis: String,
+    #[serde(with = "exact")]
     pub value: f64,
     pub verdict: Verdict,
     pub stop: String,
     pub message: String,
+    #[serde(with = "exact")]
     pub residual: f64,
     pub steps: usize,
+    #[serde(with = "exact")]
     pub wall_s: f64,
     /// Further figures of the check (plate-cylinder: uz_A(1), the lambda of
     /// the largest residual, whether far candidates were skipped).
@@ -94,12 +103,44 @@ fn apply(scene: &FrictionScene, axis: &str, value: f64) -> FrictionScene {
     s
 }
 
-/// Runs the matrix on the given scenes (in parallel), with a step budget per run.
-pub fn stress(
+/// One run of the matrix, ready to go.
+#[derive(Clone, Debug)]
+pub enum StressJob {
+    Friction {
+        scene: String,
+        axis: &'static str,
+        value: f64,
+        run: Box<FrictionScene>,
+    },
+    Shell {
+        scene: String,
+        axis: &'static str,
+        value: f64,
+        run: Box<ShellScene>,
+        /// uz_A(1) to meet (the canonical figure where eta and K are the scene's).
+        uz_ref: Option<f64>,
+    },
+}
+
+impl StressJob {
+    /// `friction-plane/eta=1e-8`.
+    pub fn label(&self) -> String {
+        let (StressJob::Friction {
+            scene, axis, value, ..
+        }
+        | StressJob::Shell {
+            scene, axis, value, ..
+        }) = self;
+        format!("{scene}/{axis}={value:e}")
+    }
+}
+
+/// The runs of the matrix on friction scenes, in order (scene, axis, value).
+pub fn friction_jobs(
     scenes: &[FrictionScene],
     axes: &[(&'static str, Vec<f64>)],
     max_steps: usize,
-) -> Vec<StressCase> {
+) -> Vec<StressJob> {
     let mut jobs = vec![];
     for sc in scenes {
         for (axis, values) in axes {
@@ -109,62 +150,111 @@ pub fn stress(
             for &v in values {
                 let mut s = apply(sc, axis, v);
                 s.max_steps = s.max_steps.min(max_steps);
-                jobs.push((sc.kind.name().to_string(), *axis, v, s));
+                jobs.push(StressJob::Friction {
+                    scene: sc.kind.name().to_string(),
+                    axis,
+                    value: v,
+                    run: Box::new(s),
+                });
             }
         }
     }
-    let results = pool::map(&jobs, |(_, _, _, s)| run(s, None, false));
-    jobs.into_iter()
-        .zip(results)
-        .map(|((scene, axis, value, s), r)| match r {
-            Err(panic) => StressCase {
-                scene,
-                axis,
-                value,
-                verdict: Verdict::Failed,
-                stop: "panic".into(),
-                message: panic,
-                residual: f64::NAN,
-                steps: 0,
-                wall_s: 0.0,
-                detail: String::new(),
-            },
-            Ok(Err(e)) => StressCase {
-                scene,
-                axis,
-                value,
-                verdict: Verdict::Diagnosed,
-                stop: e.kind().into(),
-                message: e.to_string(),
-                residual: 0.0,
-                steps: 0,
-                wall_s: 0.0,
-                detail: String::new(),
-            },
-            Ok(Ok(run)) => {
-                let residual = max_relative_residual(&s, &run.columns, &run.history);
-                let finite = run.history.iter().flatten().all(|x| x.is_finite());
-                let ok = finite && residual <= TOLERANCE;
-                let normal = matches!(run.stop.reason.as_str(), "end" | "singularity");
-                let verdict = match (ok, normal) {
-                    (true, true) => Verdict::Met,
-                    (true, false) if run.stop.message.is_some() => Verdict::Diagnosed,
-                    _ => Verdict::Failed,
-                };
-                StressCase {
-                    scene,
-                    axis,
-                    value,
-                    verdict,
-                    stop: run.stop.reason.clone(),
-                    message: run.stop.message.clone().unwrap_or_default(),
-                    residual,
-                    steps: run.stats.steps,
-                    wall_s: run.wall_s,
-                    detail: String::new(),
-                }
-            }
+    jobs
+}
+
+/// Runs one case and judges it; a panic is a failed case.
+pub fn run_job(job: &StressJob) -> StressCase {
+    let (StressJob::Friction {
+        scene, axis, value, ..
+    }
+    | StressJob::Shell {
+        scene, axis, value, ..
+    }) = job;
+    let failed = |panic: String| StressCase {
+        scene: scene.clone(),
+        axis: axis.to_string(),
+        value: *value,
+        verdict: Verdict::Failed,
+        stop: "panic".into(),
+        message: panic,
+        residual: f64::NAN,
+        steps: 0,
+        wall_s: 0.0,
+        detail: String::new(),
+    };
+    match job {
+        StressJob::Friction { run: s, .. } => sweep::catch(|| run(s, None, false))
+            .map_or_else(failed, |r| friction_case(scene.clone(), axis, *value, s, r)),
+        StressJob::Shell { run: s, uz_ref, .. } => sweep::catch(|| {
+            let report = run_loaded(s, None, false)?;
+            let c = check(s, &report)?;
+            Ok::<_, crate::Error>((report, c))
         })
+        .map_or_else(failed, |r| {
+            shell_case(scene.clone(), axis, *value, *uz_ref, r)
+        }),
+    }
+}
+
+fn friction_case(
+    scene: String,
+    axis: &'static str,
+    value: f64,
+    s: &FrictionScene,
+    r: Result<crate::model::friction_run::FrictionRun>,
+) -> StressCase {
+    match r {
+        Err(e) => StressCase {
+            scene,
+            axis: axis.to_string(),
+            value,
+            verdict: Verdict::Diagnosed,
+            stop: e.kind().into(),
+            message: e.to_string(),
+            residual: 0.0,
+            steps: 0,
+            wall_s: 0.0,
+            detail: String::new(),
+        },
+        Ok(run) => {
+            let residual = max_relative_residual(s, &run.columns, &run.history);
+            let finite = run.history.iter().flatten().all(|x| x.is_finite());
+            let ok = finite && residual <= TOLERANCE;
+            let normal = matches!(run.stop.reason.as_str(), "end" | "singularity");
+            let verdict = match (ok, normal) {
+                (true, true) => Verdict::Met,
+                (true, false) if run.stop.message.is_some() => Verdict::Diagnosed,
+                _ => Verdict::Failed,
+            };
+            StressCase {
+                scene,
+                axis: axis.to_string(),
+                value,
+                verdict,
+                stop: run.stop.reason.clone(),
+                message: run.stop.message.clone().unwrap_or_default(),
+                residual,
+                steps: run.stats.steps,
+                wall_s: run.wall_s,
+                detail: String::new(),
+            }
+        }
+    }
+}
+
+/// Runs the matrix on the given scenes (in parallel), with a step budget per run.
+pub fn stress(
+    scenes: &[FrictionScene],
+    axes: &[(&'static str, Vec<f64>)],
+    max_steps: usize,
+) -> Vec<StressCase> {
+    run_jobs(&friction_jobs(scenes, axes, max_steps))
+}
+
+fn run_jobs(jobs: &[StressJob]) -> Vec<StressCase> {
+    pool::map(jobs, run_job)
+        .into_iter()
+        .map(|r| r.expect("run_job catches panics"))
         .collect()
 }
 
@@ -188,14 +278,14 @@ fn apply_shell(scene: &ShellScene, axis: &str, value: f64) -> Option<ShellScene>
     Some(s)
 }
 
-/// Runs the matrix on plate-cylinder scenes `(name, scene)` (in parallel),
-/// with a step budget per run; axes other than eta, K and order do not apply
-/// to the frictionless shell and are left out.
-pub fn stress_shell(
+/// The runs of the matrix on plate-cylinder scenes `(name, scene)`, in order;
+/// axes other than eta, K and order do not apply to the frictionless shell
+/// and are left out.
+pub fn shell_jobs(
     scenes: &[(String, ShellScene)],
     axes: &[(&'static str, Vec<f64>)],
     max_steps: usize,
-) -> Vec<StressCase> {
+) -> Vec<StressJob> {
     let mut jobs = vec![];
     for (name, sc) in scenes {
         for (axis, values) in axes {
@@ -210,105 +300,111 @@ pub fn stress_shell(
                     _ => true,
                 };
                 let uz_ref = canonical_uz_a(name).filter(|_| at_scene_values);
-                jobs.push((name.clone(), *axis, v, with_grid_snapshots(&s), uz_ref));
+                jobs.push(StressJob::Shell {
+                    scene: name.clone(),
+                    axis,
+                    value: v,
+                    run: Box::new(with_grid_snapshots(&s)),
+                    uz_ref,
+                });
             }
         }
     }
-    let results = pool::map(&jobs, |(_, _, _, s, _)| {
-        let report = run_loaded(s, None, false)?;
-        let c = check(s, &report)?;
-        Ok::<_, crate::Error>((report, c))
-    });
-    jobs.into_iter()
-        .zip(results)
-        .map(|((scene, axis, value, _, uz_ref), r)| match r {
-            Err(panic) => StressCase {
-                scene,
-                axis,
-                value,
-                verdict: Verdict::Failed,
-                stop: "panic".into(),
-                message: panic,
-                residual: f64::NAN,
-                steps: 0,
-                wall_s: 0.0,
-                detail: String::new(),
-            },
-            Ok(Err(e)) => StressCase {
-                scene,
-                axis,
-                value,
-                verdict: Verdict::Diagnosed,
-                stop: e.kind().into(),
-                message: e.to_string(),
-                residual: 0.0,
-                steps: 0,
-                wall_s: 0.0,
-                detail: String::new(),
-            },
-            Ok(Ok((run, c))) => {
-                let finite = run.history.iter().flatten().all(|x| x.is_finite());
-                let normal = run.stop.reason == "end";
-                let uz1 = run.value_at("uz_A", 1.0);
-                let mut problems = vec![];
-                if !finite {
-                    problems.push("non-finite value in the output".to_string());
-                }
-                if !(c.max_residual <= TOLERANCE) {
+    jobs
+}
+
+/// Runs the matrix on plate-cylinder scenes `(name, scene)` (in parallel),
+/// with a step budget per run (see [`shell_jobs`]).
+pub fn stress_shell(
+    scenes: &[(String, ShellScene)],
+    axes: &[(&'static str, Vec<f64>)],
+    max_steps: usize,
+) -> Vec<StressCase> {
+    run_jobs(&shell_jobs(scenes, axes, max_steps))
+}
+
+fn shell_case(
+    scene: String,
+    axis: &'static str,
+    value: f64,
+    uz_ref: Option<f64>,
+    r: Result<(crate::run::RunReport, super::shell_check::ShellCheck)>,
+) -> StressCase {
+    match r {
+        Err(e) => StressCase {
+            scene,
+            axis: axis.to_string(),
+            value,
+            verdict: Verdict::Diagnosed,
+            stop: e.kind().into(),
+            message: e.to_string(),
+            residual: 0.0,
+            steps: 0,
+            wall_s: 0.0,
+            detail: String::new(),
+        },
+        Ok((run, c)) => {
+            let finite = run.history.iter().flatten().all(|x| x.is_finite());
+            let normal = run.stop.reason == "end";
+            let uz1 = run.value_at("uz_A", 1.0);
+            let mut problems = vec![];
+            if !finite {
+                problems.push("non-finite value in the output".to_string());
+            }
+            if !(c.max_residual <= TOLERANCE) {
+                problems.push(format!(
+                    "residual |R|/|F| = {:.2e} > {TOLERANCE:e} at lambda = {}",
+                    c.max_residual, c.worst_lambda
+                ));
+            }
+            if let (Some(want), true) = (uz_ref, normal) {
+                let got = uz1.unwrap_or(f64::NAN);
+                if !((got - want).abs() <= UZ_A_TOLERANCE) {
                     problems.push(format!(
-                        "residual |R|/|F| = {:.2e} > {TOLERANCE:e} at lambda = {}",
-                        c.max_residual, c.worst_lambda
+                        "uz_A(1) = {got:.7} m differs from the canonical {want} m by more than {UZ_A_TOLERANCE:e} m"
                     ));
                 }
-                if let (Some(want), true) = (uz_ref, normal) {
-                    let got = uz1.unwrap_or(f64::NAN);
-                    if !((got - want).abs() <= UZ_A_TOLERANCE) {
-                        problems.push(format!(
-                            "uz_A(1) = {got:.7} m differs from the canonical {want} m by more than {UZ_A_TOLERANCE:e} m"
-                        ));
-                    }
-                }
-                let verdict = match (problems.is_empty(), normal) {
-                    (true, true) => Verdict::Met,
-                    (true, false) if run.stop.message.is_some() => Verdict::Diagnosed,
-                    _ => Verdict::Failed,
-                };
-                let mut message = run.stop.message.clone().unwrap_or_default();
-                if !problems.is_empty() {
-                    if !message.is_empty() {
-                        message += "; ";
-                    }
-                    message += &problems.join("; ");
-                }
-                StressCase {
-                    scene,
-                    axis,
-                    value,
-                    verdict,
-                    stop: run.stop.reason.clone(),
-                    message,
-                    residual: c.max_residual,
-                    steps: run.steps,
-                    wall_s: run.wall_s,
-                    detail: format!(
-                        "uz_A(1) = {}{}; max residual at lambda = {} over {} grid points; {}",
-                        uz1.map_or("not reached".into(), |u| format!("{u:.7} m")),
-                        uz_ref.map_or(String::new(), |u| format!(" (canonical {u} m)")),
-                        c.worst_lambda,
-                        c.points,
-                        if run.far_nodes_skipped {
-                            format!(
-                                "far candidates skipped (pull <= {:.1e} N)",
-                                run.skipped_pull_bound
-                            )
-                        } else {
-                            "every candidate active".into()
-                        }
-                    ),
-                }
             }
-        })
-        .collect()
+            let verdict = match (problems.is_empty(), normal) {
+                (true, true) => Verdict::Met,
+                (true, false) if run.stop.message.is_some() => Verdict::Diagnosed,
+                _ => Verdict::Failed,
+            };
+            let mut message = run.stop.message.clone().unwrap_or_default();
+            if !problems.is_empty() {
+                if !message.is_empty() {
+                    message += "; ";
+                }
+                message += &problems.join("; ");
+            }
+            StressCase {
+                scene,
+                axis: axis.to_string(),
+                value,
+                verdict,
+                stop: run.stop.reason.clone(),
+                message,
+                residual: c.max_residual,
+                steps: run.steps,
+                wall_s: run.wall_s,
+                detail: format!(
+                    "uz_A(1) = {}{}; max residual at lambda = {} over {} grid points; {}",
+                    uz1.map_or("not reached".into(), |u| format!("{u:.7} m")),
+                    uz_ref.map_or(String::new(), |u| format!(" (canonical {u} m)")),
+                    c.worst_lambda,
+                    c.points,
+                    if run.far_nodes_skipped {
+                        format!(
+                            "far candidates skipped (pull <= {:.1e} N)",
+                            run.skipped_pull_bound
+                        )
+                    } else {
+                        "every candidate active".into()
+                    }
+                ),
+            }
+        }
+    }
 }
 
 /// The matrix as Markdown: one row per scene and axis, one cell per value.
@@ -323,7 +419,10 @@ pub fn markdown(cases: &[StressCase]) -> String {
         count(Verdict::Failed)
     );
     s += "| scene | axis | value: verdict (stop, steps, max relative residual) |\n|---|---|---|\n";
-    let mut keys: Vec<(String, &str)> = cases.iter().map(|c| (c.scene.clone(), c.axis)).collect();
+    let mut keys: Vec<(String, &str)> = cases
+        .iter()
+        .map(|c| (c.scene.clone(), c.axis.as_str()))
+        .collect();
     keys.dedup();
     for (scene, axis) in keys {
         let cells: Vec<String> = cases
@@ -361,4 +460,99 @@ pub fn markdown(cases: &[StressCase]) -> String {
         s += "\n";
     }
     s
+}
+
+/// Writes stress.md and stress.csv into `dir`.
+pub fn write(cases: &[StressCase], dir: &Path) -> Result<()> {
+    create_dir(dir)?;
+    let md_file = dir.join("stress.md");
+    std::fs::write(&md_file, markdown(cases)).map_err(|e| Error::Io {
+        file: md_file.clone(),
+        source: e,
+    })?;
+    let file = dir.join("stress.csv");
+    let out = |e: csv::Error| Error::write(dir.join("stress.csv"), e);
+    let mut w = csv::Writer::from_path(&file).map_err(out)?;
+    w.write_record([
+        "scene",
+        "axis",
+        "value",
+        "verdict",
+        "stop",
+        "steps",
+        "max_relative_residual",
+        "wall_s",
+        "message",
+        "detail",
+    ])
+    .map_err(out)?;
+    for c in cases {
+        w.write_record([
+            c.scene.clone(),
+            c.axis.to_string(),
+            format!("{:e}", c.value),
+            format!("{:?}", c.verdict),
+            c.stop.clone(),
+            c.steps.to_string(),
+            format!("{:e}", c.residual),
+            format!("{:e}", c.wall_s),
+            c.message.clone(),
+            c.detail.clone(),
+        ])
+        .map_err(out)?;
+    }
+    w.flush().map_err(|e| Error::Io { file, source: e })
+}
+
+/// The stress matrix as a sweep (`anm stress`): one item per run (friction
+/// scenes first, then plate-cylinder scenes, each in --cases order); the
+/// merge writes stress.md and stress.csv and fails when a run failed.
+pub struct StressSweep {
+    jobs: Vec<StressJob>,
+    inputs: Vec<PathBuf>,
+}
+
+impl StressSweep {
+    /// The matrix of the full axes on the scenes `DIR/CASE.toml`.
+    pub fn new(scenes: &Path, cases: &[String], max_steps: usize) -> Result<Self> {
+        let (mut friction, mut shells, mut inputs) = (vec![], vec![], vec![]);
+        for name in cases {
+            let path = scenes.join(format!("{name}.toml"));
+            let text = crate::scene::read(&path)?;
+            match crate::scene::kind(&path, &text)? {
+                Kind::Shell => shells.push((name.clone(), crate::scene::shell::load(&path)?)),
+                kind => friction.push(crate::scene::friction::load(&path, &text, kind)?),
+            }
+            inputs.push(path);
+        }
+        let mut jobs = friction_jobs(&friction, &full_axes(), max_steps);
+        jobs.extend(shell_jobs(&shells, &shell_axes(), max_steps));
+        Ok(StressSweep { jobs, inputs })
+    }
+}
+
+impl Sweep for StressSweep {
+    fn labels(&self) -> Vec<String> {
+        self.jobs.iter().map(StressJob::label).collect()
+    }
+    fn inputs(&self) -> Vec<PathBuf> {
+        self.inputs.clone()
+    }
+    fn run_item(&self, k: usize, _dir: Option<&Path>) -> Result<serde_json::Value> {
+        sweep::encode(&run_job(&self.jobs[k]))
+    }
+    fn merge(&self, items: &[serde_json::Value], dir: Option<&Path>) -> Result<Merged> {
+        let cases: Vec<StressCase> = items
+            .iter()
+            .enumerate()
+            .map(|(k, v)| sweep::decode(k, v))
+            .collect::<Result<_>>()?;
+        if let Some(dir) = dir {
+            write(&cases, dir)?;
+        }
+        Ok(Merged {
+            markdown: markdown(&cases),
+            failed: cases.iter().any(|c| c.verdict == Verdict::Failed),
+        })
+    }
 }

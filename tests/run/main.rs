@@ -1,4 +1,5 @@
-//! The run driver: units, interruption and resume, stability stress.
+//! The run driver: units, interruption and resume, stability stress,
+//! sweeps item by item.
 //! One test binary per area (DESIGN §1): the files below are its modules.
 
 #[path = "../common/mod.rs"]
@@ -6,4 +7,5 @@ mod common;
 
 mod interrupt_resume;
 mod stability;
+mod sweeps;
 mod units;
