@@ -28,10 +28,10 @@ pub fn write(path: &Path, s: &Structure, values: &[f64], symmetric: bool) -> std
         .sum::<usize>();
     writeln!(w, "{} {} {count}", s.n(), s.n())?;
     for c in 0..s.n() {
-        for k in s.col_ptr()[c]..s.col_ptr()[c + 1] {
-            let r = s.row_idx()[k];
+        let slots = s.col_ptr()[c]..s.col_ptr()[c + 1];
+        for (&r, v) in s.row_idx()[slots.clone()].iter().zip(&values[slots]) {
             if keep(r, c) {
-                writeln!(w, "{} {} {:.17e}", r + 1, c + 1, values[k])?;
+                writeln!(w, "{} {} {v:.17e}", r + 1, c + 1)?;
             }
         }
     }

@@ -164,7 +164,7 @@ impl Default for LinearSolver {
 
 enum Factor {
     Symmetric(Arc<SymmetricSymbolic>, SymmetricFactor),
-    Lu(Arc<LuSymbolic>, LuFactor),
+    Lu(Arc<LuSymbolic>, Box<LuFactor>),
     /// MUMPS keeps the factors inside its instance: a factorization is valid
     /// until the solver's next one (checked by the generation number).
     #[cfg(feature = "mumps")]
@@ -327,7 +327,7 @@ impl LinearSolver {
             let sym = Arc::clone(self.lu.as_ref().expect("set above"));
             self.stats.factor_entries = 0;
             let f = LuFactor::new(&sym, s, values, self.par)?;
-            Factor::Lu(sym, f)
+            Factor::Lu(sym, Box::new(f))
         };
         analysis = self.stats.analysis_s - analysis;
         let mut f = Factorization {
@@ -394,6 +394,9 @@ mod mumps_backend {
     use super::super::mumps::Mumps;
     use super::Structure;
 
+    /// Generation, memory figures (MB), negative pivots, factor entries.
+    pub type Factored = (u64, (f64, f64, f64), usize, usize);
+
     /// One MUMPS instance, analysed for one pattern.
     pub struct Instance {
         mumps: Mumps,
@@ -417,10 +420,7 @@ mod mumps_backend {
 
         /// Factorizes; returns the generation, the memory figures, the
         /// negative pivots and the factor entries.
-        pub fn factorize(
-            &mut self,
-            values: &[f64],
-        ) -> Result<(u64, (f64, f64, f64), usize, usize), String> {
+        pub fn factorize(&mut self, values: &[f64]) -> Result<Factored, String> {
             self.mumps.factorize(values)?;
             self.generation += 1;
             Ok((

@@ -3,6 +3,7 @@
 //! assembler builds once from its connectivity (large shells: no triplet list,
 //! no sort per factorization).
 
+use std::borrow::Cow;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, OnceLock};
 
@@ -218,11 +219,10 @@ impl SparseMatrix {
     pub fn compressed(
         &self,
         known: Option<&Arc<Structure>>,
-    ) -> Result<(Arc<Structure>, Vec<f64>), String> {
-        if self.extra.is_empty() {
-            if let Some(s) = &self.structure {
-                return Ok((Arc::clone(s), self.values.clone()));
-            }
+    ) -> Result<(Arc<Structure>, Cow<'_, [f64]>), String> {
+        if let (true, Some(s)) = (self.extra.is_empty(), &self.structure) {
+            // The assembler's own pattern: no copy of the values.
+            return Ok((Arc::clone(s), Cow::Borrowed(&self.values)));
         }
         let extra: Vec<(usize, usize)> = self.extra.iter().map(|&(r, c, _)| (r, c)).collect();
         let built = match &self.structure {
@@ -238,7 +238,7 @@ impl SparseMatrix {
             let k = structure.slot(r, c).expect("every entry is in the union");
             values[k] += v;
         }
-        Ok((structure, values))
+        Ok((structure, Cow::Owned(values)))
     }
 }
 
@@ -276,7 +276,7 @@ mod tests {
         b.add(1, 1, 1.0);
         let (s2, v) = b.compressed(Some(&s1)).unwrap();
         assert_eq!(s1.id(), s2.id());
-        assert_eq!(v, vec![4.0, 1.0]);
+        assert_eq!(*v, [4.0, 1.0]);
         assert!(Structure::from_coords(2, [(2, 0)]).is_err());
     }
 }

@@ -7,11 +7,11 @@
 //! (assembly, factorization, solves, series terms) and peak memory; the
 //! exponents b of t = c n^b are fitted by least squares in log-log.
 
+use super::factor::FactorReport;
 use super::sweep::{self, Merged, Sweep};
 use crate::error::{Error, Result};
 use crate::mesh::{gmsh_write, structured};
 use crate::output::create_dir;
-use super::factor::FactorReport;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use std::process::Command;

@@ -149,3 +149,54 @@ fn valid_scenes_pass_check() {
         );
     }
 }
+
+/// `anm factor`: a missing or malformed matrix file and a bad option stop
+/// with the file or the option named, no panic.
+#[test]
+fn factor_rejects_bad_matrices_and_options() {
+    let dir = std::env::temp_dir().join("anm-factor-bad-input");
+    std::fs::create_dir_all(&dir).unwrap();
+    let bad = dir.join("bad.mtx");
+    std::fs::write(
+        &bad,
+        "%%MatrixMarket matrix coordinate real general\n2 2 2\n1 1 1.0\n",
+    )
+    .unwrap();
+    let good = dir.join("good.mtx");
+    std::fs::write(
+        &good,
+        "%%MatrixMarket matrix coordinate real symmetric\n2 2 3\n1 1 2.0\n2 1 -1.0\n2 2 2.0\n",
+    )
+    .unwrap();
+    let missing = dir.join("missing.mtx");
+    let cases: [(&Path, &[&str], &[&str]); 4] = [
+        (&missing, &[], &["missing.mtx"]),
+        (&bad, &[], &["bad.mtx", "1 entries, the size line says 2"]),
+        (&good, &["--backend", "pardiso"], &["--backend", "pardiso"]),
+        (&good, &["--threads", "0"], &["--threads"]),
+    ];
+    for (file, args, needles) in cases {
+        let o = Command::new(env!("CARGO_BIN_EXE_anm"))
+            .arg("factor")
+            .arg(file)
+            .args(args)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_ne!(o.status.code(), Some(0), "{err}");
+        assert!(!err.contains("panicked"), "{err}");
+        for n in needles {
+            assert!(err.contains(n), "`{n}` not in: {err}");
+        }
+    }
+    // The good one factors: LDLᵀ of [[2, −1], [−1, 2]], no negative pivot.
+    let o = Command::new(env!("CARGO_BIN_EXE_anm"))
+        .arg("factor")
+        .arg(&good)
+        .output()
+        .unwrap();
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["backend"], "ldlt");
+    assert_eq!(v["negative_pivots"], 0);
+    assert!(v["backward_error"].as_f64().unwrap() <= 1e-15);
+}

@@ -377,6 +377,12 @@ fn fix_and_probe_key_errors_name_the_key() {
             vec!["solver.length_scale", "> 0"],
         ),
         (
+            "linear-solver.toml",
+            "order = 15",
+            "order = 15\nlinear_solver = \"pardiso\"",
+            vec!["solver.linear_solver", "got \"pardiso\""],
+        ),
+        (
             "group-box.toml",
             "box = [[1.0, -1.0, -1.0], [1.0, 1.0, 1.0]]",
             "box = [[5.0, -1.0, -1.0], [6.0, 1.0, 1.0]]",
