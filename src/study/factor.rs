@@ -142,3 +142,76 @@ pub fn markdown(rows: &[FactorReport]) -> String {
     }
     s
 }
+
+/// The peers of reference/peers/ (MKL Pardiso, MUMPS) on the same matrix,
+/// when their venv is installed (`bash reference/peers/setup.sh`): one row
+/// per successful (solver, kind, threads) run of factor_peers.py; `None`
+/// when the venv is absent.
+pub fn peers(matrix: &Path, threads: &str) -> Result<Option<Vec<FactorReport>>> {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("reference/peers");
+    let python = root.join(".venv/bin/python");
+    if !python.exists() {
+        return Ok(None);
+    }
+    let json = matrix.with_extension("peers.json");
+    let run = std::process::Command::new(&python)
+        .arg(root.join("factor_peers.py"))
+        .arg(matrix)
+        .args(["--threads", threads, "--json"])
+        .arg(&json)
+        .output()
+        .map_err(|source| Error::Io {
+            file: python.clone(),
+            source,
+        })?;
+    let text = std::fs::read_to_string(&json).map_err(|e| {
+        Error::study(
+            "factor",
+            matrix.display().to_string(),
+            format!(
+                "factor_peers.py wrote no {} ({e}): {}",
+                json.display(),
+                String::from_utf8_lossy(&run.stderr)
+            ),
+        )
+    })?;
+    let v: serde_json::Value = serde_json::from_str(&text).map_err(|e| Error::Parse {
+        file: json.clone(),
+        message: e.to_string(),
+    })?;
+    let n = v["matrix"]["n"].as_u64().unwrap_or(0) as usize;
+    let entries = v["matrix"]["stored_entries"].as_u64().unwrap_or(0) as usize;
+    let rows = v["runs"]
+        .as_array()
+        .map(|runs| {
+            runs.iter()
+                .filter(|r| r["ok"].as_bool() == Some(true))
+                .map(|r| {
+                    let num = |k: &str| r[k].as_f64().unwrap_or(f64::NAN);
+                    FactorReport {
+                        matrix: matrix.display().to_string(),
+                        n,
+                        entries,
+                        backend: format!(
+                            "{} {} ({})",
+                            r["solver"].as_str().unwrap_or("?"),
+                            r["kind"].as_str().unwrap_or("?"),
+                            r["ordering"].as_str().unwrap_or("?")
+                        ),
+                        threads: r["threads"].as_u64().unwrap_or(0) as usize,
+                        analysis_s: num("analysis_s"),
+                        factorization_s: num("factorization_s"),
+                        solve_s: num("solve_s"),
+                        factor_entries: r["factor_entries"].as_u64().unwrap_or(0) as usize,
+                        backward_error: num("backward_error"),
+                        negative_pivots: r["negative_pivots"].as_u64().map(|k| k as usize),
+                        peak_rss_bytes: r["peak_rss_MiB"]
+                            .as_f64()
+                            .map(|m| (m * 1048576.0) as u64),
+                    }
+                })
+                .collect()
+        })
+        .unwrap_or_default();
+    Ok(Some(rows))
+}

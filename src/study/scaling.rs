@@ -152,7 +152,14 @@ pub fn run_size(
     let factor = if write_matrix {
         let mtx = out.join("tangent.mtx");
         eprintln!("{nx}x{ny}: factoring {} ...", mtx.display());
-        super::factor::compare(exe, &mtx, FACTOR_CONFIGS)?
+        let mut rows = super::factor::compare(exe, &mtx, FACTOR_CONFIGS)?;
+        match super::factor::peers(&mtx, "1,2")? {
+            Some(peers) => rows.extend(peers),
+            None => eprintln!(
+                "{nx}x{ny}: no peers (MKL Pardiso, MUMPS): bash reference/peers/setup.sh installs them"
+            ),
+        }
+        rows
     } else {
         vec![]
     };
