@@ -205,9 +205,7 @@ pub fn peers(matrix: &Path, threads: &str) -> Result<Option<Vec<FactorReport>>> 
                         factor_entries: r["factor_entries"].as_u64().unwrap_or(0) as usize,
                         backward_error: num("backward_error"),
                         negative_pivots: r["negative_pivots"].as_u64().map(|k| k as usize),
-                        peak_rss_bytes: r["peak_rss_MiB"]
-                            .as_f64()
-                            .map(|m| (m * 1048576.0) as u64),
+                        peak_rss_bytes: r["peak_rss_MiB"].as_f64().map(|m| (m * 1048576.0) as u64),
                     }
                 })
                 .collect()
