@@ -1,6 +1,13 @@
 //! General (non-symmetric) tangents: faer's supernodal sparse LU with partial
 //! pivoting, COLAMD column ordering.
 //!
+//! faer sizes the LU's factor from the Cholesky factor of AᵀA (an upper
+//! bound for any row pivoting, George & Ng 1987). A symmetric ordering (AMD
+//! on A, the LDLᵀ's) through faer's lower-level supernodal LU was tried on
+//! the 98,400-unknown strip: its AᵀA-sized factor exceeded the machine's
+//! 24 GiB and the process was killed, where COLAMD (which orders for AᵀA)
+//! takes 3.5 GiB. So COLAMD stays; symmetric tangents go to LDLᵀ instead.
+//!
 //! Measured on the plate-cylinder tangent (360 dofs, 6-dof nodal blocks),
 //! faer's automatic choice takes the simplicial (column-by-column) LU; the
 //! supernodal LU works on dense nodal blocks and is several times faster, so
