@@ -108,8 +108,8 @@ enum Command {
         #[arg(long, default_value_t = 20)]
         repeat: usize,
     },
-    /// Solve a scene with an external reference solver.
-    #[cfg(feature = "reference")]
+    /// Solve a friction scene with an external reference solver (IDA with
+    /// `--features reference`; diffsol always).
     Reference {
         #[command(subcommand)]
         solver: ReferenceSolver,
@@ -132,22 +132,116 @@ enum Command {
     },
 }
 
-#[cfg(feature = "reference")]
 #[derive(Subcommand)]
 enum ReferenceSolver {
-    /// SUNDIALS IDA on a friction scene's DAE: writes history.csv, ida_steps.csv,
-    /// summary.json and ida_steps.svg into DIR.
+    /// SUNDIALS IDA on a friction scene's DAE: writes history.csv, steps.csv,
+    /// summary.json and steps.svg into DIR.
+    #[cfg(feature = "reference")]
     Ida {
         scene: PathBuf,
         #[arg(short, long, value_name = "DIR")]
         out: PathBuf,
         /// Relative tolerance.
-        #[arg(long, default_value_t = 1e-10)]
+        #[arg(long, default_value_t = 1e-10, allow_negative_numbers = true)]
         rtol: f64,
-        /// Absolute tolerance.
-        #[arg(long, default_value_t = 1e-10)]
-        atol: f64,
+        /// Absolute tolerance of the differential unknowns (positions, m);
+        /// default: rtol.
+        #[arg(long, allow_negative_numbers = true)]
+        atol: Option<f64>,
+        /// The algebraic unknowns (velocities, forces; u_y on the plane) in
+        /// the local error test: `suppress` (default: out of it,
+        /// IDASetSuppressAlg) or their absolute tolerance (IDASVtolerances).
+        #[arg(long, default_value = "suppress", allow_negative_numbers = true)]
+        atol_algebraic: String,
+        /// The friction law in the DAE: `product` (R_T Vc^q |w|_reg^(1-q) +
+        /// f N w = 0, not steep in w; default) or `direct` (R_T + f N g(w) = 0).
+        #[arg(long, default_value = "product")]
+        friction_row: String,
     },
+    /// diffsol (pure Rust, BDF or ESDIRK34, singular mass matrix) on a
+    /// friction scene's DAE: the same outputs as `anm reference ida`.
+    Diffsol {
+        scene: PathBuf,
+        #[arg(short, long, value_name = "DIR")]
+        out: PathBuf,
+        /// `bdf` (variable order 1-5) or `esdirk` (ESDIRK34, order 3).
+        #[arg(long, default_value = "bdf")]
+        method: String,
+        /// Relative tolerance.
+        #[arg(long, default_value_t = 1e-10, allow_negative_numbers = true)]
+        rtol: f64,
+        /// Absolute tolerance of the differential unknowns (positions, m);
+        /// default: rtol.
+        #[arg(long, allow_negative_numbers = true)]
+        atol: Option<f64>,
+        /// Absolute tolerance of the algebraic unknowns (diffsol has no
+        /// suppress-alg; its error norm covers every unknown).
+        #[arg(long, default_value_t = anm::reference::diffsol::ATOL_ALGEBRAIC, allow_negative_numbers = true)]
+        atol_algebraic: f64,
+        /// Newton convergence failures allowed over the whole run (diffsol
+        /// counts them per run, not per step; its default is 50).
+        #[arg(long, default_value_t = anm::reference::diffsol::MAX_NONLINEAR_FAILURES)]
+        max_nonlinear_failures: usize,
+        /// Steps between evaluations of the Jacobian df/dy (diffsol's own
+        /// default is 50; the matrix M - h gamma J is refactored more often).
+        #[arg(long, default_value_t = anm::reference::diffsol::RHS_JACOBIAN_AFTER_STEPS)]
+        rhs_jacobian_after_steps: usize,
+        /// The friction law in the DAE: `product` (default) or `direct`.
+        #[arg(long, default_value = "product")]
+        friction_row: String,
+    },
+}
+
+/// Loads a friction scene for a reference solver, or says why not.
+fn reference_scene(scene: &std::path::Path, solver: &str) -> anyhow::Result<anm::scene::friction::FrictionScene> {
+    let (kind, friction) = load(scene)?;
+    let Some(sc) = friction else {
+        anyhow::bail!(
+            "{}: {solver} solves the friction scenes only, not `{}`",
+            scene.display(),
+            kind.name()
+        );
+    };
+    Ok(sc)
+}
+
+/// Writes a reference run's outputs, prints its summary line; exit code 2
+/// when it did not reach the end.
+fn reference_report(
+    scene: &std::path::Path,
+    run: &anm::reference::IdaRun,
+    out: &std::path::Path,
+) -> anyhow::Result<ExitCode> {
+    anm::reference::output::write(run, out)?;
+    let c = &run.counters;
+    println!(
+        "{}: {} {} ({}): stop = {} at t = {:.9} s; {} steps ({} at order 1), {} error-test failures, {} convergence failures, {} residual evals, {} Jacobian evals, {} factorizations, {:.3} s; outputs in {}",
+        scene.display(),
+        run.tool,
+        run.version,
+        run.method,
+        run.stop.reason,
+        run.stop.t,
+        c.steps,
+        run.order_one_steps(),
+        c.error_test_failures,
+        c.convergence_failures,
+        c.residual_evaluations,
+        c.jacobian_evaluations,
+        c.factorizations,
+        run.wall_s,
+        out.display()
+    );
+    if let Some(m) = &run.stop.message {
+        println!("  {m}");
+    }
+    if let Some((t1, t10)) = run.surge_window() {
+        println!("  |slip| rises from Vc to 10 Vc over [{t1:.9}, {t10:.9}] s");
+    }
+    Ok(match run.stop.reason.as_str() {
+        "end" => ExitCode::SUCCESS,
+        _ => ExitCode::from(2),
+    })
 }
 
 fn main() -> ExitCode {
@@ -180,43 +274,57 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
                     out,
                     rtol,
                     atol,
+                    atol_algebraic,
+                    friction_row,
                 },
         } => {
-            let (kind, friction) = load(&scene)?;
-            let Some(sc) = friction else {
-                anyhow::bail!(
-                    "{}: IDA solves the friction scenes only, not `{}`",
-                    scene.display(),
-                    kind.name()
-                );
+            use anm::reference::settings::{AlgebraicControl, Tolerances};
+            let settings = anm::reference::IdaSettings {
+                tol: Tolerances::new(rtol, atol)?,
+                algebraic: AlgebraicControl::parse("atol-algebraic", &atol_algebraic)?,
+                friction_row: friction_row
+                    .parse()
+                    .map_err(|e: String| anyhow::anyhow!("--friction-row: {e}"))?,
             };
-            let run = anm::reference::solve(&sc, rtol, atol)
+            let sc = reference_scene(&scene, "IDA")?;
+            let run = anm::reference::solve(&sc, &settings)
                 .with_context(|| format!("IDA on {}", scene.display()))?;
-            anm::reference::output::write(&run, &out)?;
-            let c = &run.counters;
-            println!(
-                "{}: SUNDIALS IDA {}: stop = {} at t = {:.9} s; {} steps, {} residual evals, {} Jacobian evals, {} linear setups, {:.3} s; outputs in {}",
-                scene.display(),
-                run.version,
-                run.stop.reason,
-                run.stop.t,
-                c.steps,
-                c.residual_evals,
-                c.jacobian_evals,
-                c.linear_setups,
-                run.wall_s,
-                out.display()
-            );
-            if let Some(m) = &run.stop.message {
-                println!("  {m}");
-            }
-            if let Some((t1, t10)) = run.surge_window() {
-                println!("  |slip| rises from Vc to 10 Vc over [{t1:.9}, {t10:.9}] s");
-            }
-            Ok(match run.stop.reason.as_str() {
-                "end" => ExitCode::SUCCESS,
-                _ => ExitCode::from(2),
-            })
+            reference_report(&scene, &run, &out)
+        }
+        Command::Reference {
+            solver:
+                ReferenceSolver::Diffsol {
+                    scene,
+                    out,
+                    method,
+                    rtol,
+                    atol,
+                    atol_algebraic,
+                    max_nonlinear_failures,
+                    rhs_jacobian_after_steps,
+                    friction_row,
+                },
+        } => {
+            use anm::reference::diffsol::DiffsolSettings;
+            use anm::reference::settings::{DiffsolMethod, Tolerances, positive};
+            let method: DiffsolMethod = method
+                .parse()
+                .map_err(|e: String| anyhow::anyhow!("--method: {e}"))?;
+            positive("atol-algebraic", atol_algebraic)?;
+            let settings = DiffsolSettings {
+                method,
+                tol: Tolerances::new(rtol, atol)?,
+                atol_algebraic,
+                max_nonlinear_failures,
+                rhs_jacobian_after_steps,
+                friction_row: friction_row
+                    .parse()
+                    .map_err(|e: String| anyhow::anyhow!("--friction-row: {e}"))?,
+            };
+            let sc = reference_scene(&scene, "diffsol")?;
+            let run = anm::reference::diffsol::solve(&sc, &settings)
+                .with_context(|| format!("diffsol on {}", scene.display()))?;
+            reference_report(&scene, &run, &out)
         }
         Command::Audit {
             scene,

@@ -15,14 +15,29 @@ use crate::model::friction_run::{FrictionRun, run};
 use crate::output::create_dir;
 use crate::output::plot::{Curve, Panel, draw};
 use crate::scene::friction::FrictionScene;
+use crate::reference::diffsol::DiffsolSettings;
+use crate::reference::settings::DiffsolMethod;
 use crate::series::Stats;
 use std::path::{Path, PathBuf};
 
 /// A method and its accuracy setting.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Method {
-    Anm { order: usize, eps: f64 },
-    Ida { rtol: f64 },
+    Anm {
+        order: usize,
+        eps: f64,
+    },
+    /// IDA with the tuned set-up of `anm reference ida` (atol = rtol,
+    /// algebraic unknowns out of the error test).
+    Ida {
+        rtol: f64,
+    },
+    /// diffsol with the defaults of `anm reference diffsol` (atol = rtol,
+    /// algebraic atol [`crate::reference::diffsol::ATOL_ALGEBRAIC`]).
+    Diffsol {
+        method: DiffsolMethod,
+        rtol: f64,
+    },
 }
 
 impl Method {
@@ -30,21 +45,27 @@ impl Method {
         match self {
             Method::Anm { order, .. } => format!("ANM N={order}"),
             Method::Ida { .. } => "IDA".into(),
+            Method::Diffsol { method, .. } => format!("diffsol {}", method.name().to_uppercase()),
         }
     }
     pub fn setting(&self) -> String {
         match self {
             Method::Anm { eps, .. } => format!("eps={eps:.0e}"),
-            Method::Ida { rtol } => format!("rtol={rtol:.0e}"),
+            Method::Ida { rtol } | Method::Diffsol { rtol, .. } => format!("rtol={rtol:.0e}"),
         }
     }
-    /// The command-line form read by [`Method::from_str`]: "anm:15:1e-9" or
-    /// "ida:1e-10".
+    /// The command-line form read by [`Method::from_str`]: "anm:15:1e-9",
+    /// "ida:1e-10", "diffsol-bdf:1e-8" or "diffsol-esdirk:1e-8".
     pub fn spec(&self) -> String {
         match self {
             Method::Anm { order, eps } => format!("anm:{order}:{eps:e}"),
             Method::Ida { rtol } => format!("ida:{rtol:e}"),
+            Method::Diffsol { method, rtol } => format!("diffsol-{}:{rtol:e}", method.name()),
         }
+    }
+    /// A baseline (not the ANM).
+    pub fn is_baseline(&self) -> bool {
+        !matches!(self, Method::Anm { .. })
     }
 }
 
@@ -59,8 +80,12 @@ impl std::str::FromStr for Method {
                 eps: num(eps)?,
             }),
             ["ida", rtol] => Ok(Method::Ida { rtol: num(rtol)? }),
+            [name, rtol] if name.starts_with("diffsol-") => Ok(Method::Diffsol {
+                method: name["diffsol-".len()..].parse()?,
+                rtol: num(rtol)?,
+            }),
             _ => Err(format!(
-                "`{s}`: expected anm:ORDER:EPS (e.g. anm:15:1e-9) or ida:RTOL (e.g. ida:1e-10)"
+                "`{s}`: expected anm:ORDER:EPS (e.g. anm:15:1e-9), ida:RTOL (e.g. ida:1e-10), diffsol-bdf:RTOL or diffsol-esdirk:RTOL"
             )),
         }
     }
@@ -100,38 +125,49 @@ pub fn solve(scene: &FrictionScene, method: &Method) -> Result<Solution> {
             Ok(run(&s, None, false)?.into())
         }
         Method::Ida { rtol } => ida(scene, *rtol),
+        Method::Diffsol { method, rtol } => {
+            let settings = DiffsolSettings::new(*method, *rtol).map_err(|e| study_error(scene, e))?;
+            let run = crate::reference::diffsol::solve(scene, &settings)
+                .map_err(|e| study_error(scene, e))?;
+            Ok(from_reference(run))
+        }
     }
 }
 
-/// IDA as a method of the benchmark: solved at rtol (atol = rtol, as in
-/// `anm reference ida`'s default pairing); its steps and linear-solver setups
-/// (its factorizations) map onto [`Stats`]. The study reads the reference
-/// solver, never the other way round (DESIGN §1).
-#[cfg(feature = "reference")]
-fn ida(scene: &FrictionScene, rtol: f64) -> Result<Solution> {
-    let run = crate::reference::solve(scene, rtol, rtol).map_err(|e| {
-        crate::Error::study(
-            "bench",
-            scene.file.display().to_string(),
-            format!("IDA: {e}"),
-        )
-    })?;
+fn study_error(scene: &FrictionScene, e: crate::reference::IdaError) -> crate::Error {
+    crate::Error::study("bench", scene.file.display().to_string(), e.to_string())
+}
+
+/// A reference solver's run as a [`Solution`]: its common counters mapped
+/// onto [`Stats`] (factorizations, linear solves, residual evaluations).
+/// The study reads the reference solvers, never the other way round
+/// (DESIGN §1).
+fn from_reference(run: crate::reference::IdaRun) -> Solution {
     let c = &run.counters;
     let stats = crate::series::Stats {
-        steps: c.steps.max(0) as usize,
-        factorizations: c.linear_setups.max(0) as usize,
-        solves: c.nonlinear_iters.max(0) as usize,
-        residual_evaluations: (c.residual_evals + c.ls_residual_evals).max(0) as usize,
+        steps: c.steps as usize,
+        factorizations: c.factorizations as usize,
+        solves: c.linear_solves as usize,
+        residual_evaluations: c.residual_evaluations as usize,
         ..Default::default()
     };
-    Ok(Solution {
+    Solution {
         columns: run.columns,
         rows: run.history,
         stats,
         wall_s: run.wall_s,
         stop: run.stop.reason,
         t_stop: run.stop.t,
-    })
+    }
+}
+
+/// IDA as a method of the benchmark, with the set-up of `anm reference ida`
+/// at rtol (atol = rtol, algebraic unknowns out of the error test).
+#[cfg(feature = "reference")]
+fn ida(scene: &FrictionScene, rtol: f64) -> Result<Solution> {
+    let settings = crate::reference::IdaSettings::new(rtol).map_err(|e| study_error(scene, e))?;
+    let run = crate::reference::solve(scene, &settings).map_err(|e| study_error(scene, e))?;
+    Ok(from_reference(run))
 }
 
 #[cfg(not(feature = "reference"))]
