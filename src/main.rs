@@ -157,6 +157,10 @@ enum ReferenceSolver {
         /// f N w = 0, not steep in w; default) or `direct` (R_T + f N g(w) = 0).
         #[arg(long, default_value = "product")]
         friction_row: String,
+        /// Newton iterations per step attempt (IDASetMaxNonlinIters; IDA's
+        /// own default is 4).
+        #[arg(long, default_value_t = anm::reference::ida_run::MAX_NONLIN_ITERS)]
+        max_nonlin_iters: usize,
     },
     /// diffsol (pure Rust, BDF or ESDIRK34, singular mass matrix) on a
     /// friction scene's DAE: the same outputs as `anm reference ida`.
@@ -276,6 +280,7 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
                     atol,
                     atol_algebraic,
                     friction_row,
+                    max_nonlin_iters,
                 },
         } => {
             use anm::reference::settings::{AlgebraicControl, Tolerances};
@@ -285,6 +290,7 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
                 friction_row: friction_row
                     .parse()
                     .map_err(|e: String| anyhow::anyhow!("--friction-row: {e}"))?,
+                max_nonlin_iters,
             };
             let sc = reference_scene(&scene, "IDA")?;
             let run = anm::reference::solve(&sc, &settings)
