@@ -78,12 +78,17 @@ enum Command {
         scaling: Vec<String>,
         #[arg(long, default_value_t = 10)]
         scaling_steps: usize,
-        /// Error target of the head-to-head (target.md): the fastest ANM and
-        /// IDA settings reaching it are timed again, interleaved. A case whose
-        /// two references disagree by more than target / 1.2 is compared at
-        /// 1.2 x their difference.
-        #[arg(long, default_value_t = 1e-8)]
-        target: f64,
+        /// Error targets of the fastest-setting table (fastest.md) and of the
+        /// head-to-head (target.md): the fastest ANM and baseline (IDA,
+        /// diffsol BDF, diffsol ESDIRK) settings reaching each are timed
+        /// again, interleaved. A case whose two references disagree by more
+        /// than target / 1.2 is compared at 1.2 x their difference.
+        #[arg(long, value_delimiter = ',', default_values_t = [1e-6, 1e-8])]
+        target: Vec<f64>,
+        /// Values of zeta (N) at which friction-plane and friction-roller
+        /// are benchmarked, each a case of its own (friction-1d has no zeta).
+        #[arg(long, value_delimiter = ',', default_values_t = [1e-1, 1e-4])]
+        zeta: Vec<f64>,
         /// Interleaved rounds of the head-to-head.
         #[arg(long, default_value_t = 100)]
         rounds: usize,
@@ -101,7 +106,8 @@ enum Command {
     /// `anm::study::timing::instructions`) it gives the instruction count.
     Time {
         scene: PathBuf,
-        /// anm:ORDER:EPS (e.g. anm:15:1e-9) or ida:RTOL (e.g. ida:1e-10).
+        /// anm:ORDER:EPS (e.g. anm:15:1e-9), ida:RTOL (e.g. ida:1e-10),
+        /// diffsol-bdf:RTOL or diffsol-esdirk:RTOL.
         #[arg(long)]
         method: anm::study::bench::Method,
         /// Timed repetitions after a warm-up run; 0: a single run (for callgrind).
@@ -394,11 +400,18 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
             scaling,
             scaling_steps,
             target,
+            zeta,
             rounds,
             instructions,
             out,
         } => {
             use anm::study::{bench, target as head};
+            for &z in &zeta {
+                anm::reference::settings::positive("zeta", z)?;
+            }
+            for &t in &target {
+                anm::reference::settings::positive("target", t)?;
+            }
             if !scaling.is_empty() {
                 let Some(out) = &out else {
                     anyhow::bail!(
@@ -435,36 +448,57 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
                     rows.extend(r);
                     continue;
                 };
-                let reference = bench::reference(&sc, with_ida)?;
-                reference_name = reference.name.clone();
-                eprintln!(
-                    "{case}: reference {reference_name}; ANM(30, 1e-14) differs from it by {:.2e} on t <= {:.4}",
-                    reference.anm_floor, reference.t_max
-                );
-                let methods = bench::friction_methods(with_ida);
-                let r = bench::work_precision(
-                    case,
-                    &sc,
-                    &methods,
-                    &reference.solution,
-                    reference.t_max,
-                    repeat,
-                );
-                print!("{}", bench::markdown(&r, &reference_name));
-                let h = head::head_to_head(
-                    case,
-                    &sc,
-                    &r,
-                    &methods,
-                    reference.target(target),
-                    rounds,
-                    exe.as_deref(),
-                )?;
-                heads.push(h);
-                rows.extend(r);
+                // One case per zeta where zeta enters the equations.
+                let variants: Vec<(String, anm::scene::friction::FrictionScene)> =
+                    if sc.contact.is_some() {
+                        zeta.iter()
+                            .map(|&z| {
+                                let mut s = sc.clone();
+                                s.friction.zeta = Some(z);
+                                (format!("{case} zeta={z:.0e}"), s)
+                            })
+                            .collect()
+                    } else {
+                        vec![(case.clone(), sc)]
+                    };
+                for (name, sc) in variants {
+                    let reference = bench::reference(&sc, with_ida)?;
+                    reference_name = reference.name.clone();
+                    eprintln!(
+                        "{name}: reference {reference_name}; ANM(30, 1e-14) differs from it by {:.2e} on t <= {:.4}",
+                        reference.anm_floor, reference.t_max
+                    );
+                    let methods = bench::friction_methods(with_ida);
+                    let r = bench::work_precision(
+                        &name,
+                        &sc,
+                        &methods,
+                        &reference.solution,
+                        reference.t_max,
+                        repeat,
+                    );
+                    print!("{}", bench::markdown(&r, &reference_name));
+                    print!("\n{}", bench::fastest_markdown(&r, &target));
+                    for &t in &target {
+                        let h = head::head_to_head(
+                            &name,
+                            &sc,
+                            &r,
+                            &methods,
+                            reference.target(t),
+                            rounds,
+                            exe.as_deref(),
+                        )?;
+                        heads.push(h);
+                    }
+                    rows.extend(r);
+                }
             }
             if let Some(out) = &out {
                 bench::write(&rows, &reference_name, out)?;
+                let file = out.join("fastest.md");
+                std::fs::write(&file, bench::fastest_markdown(&rows, &target))
+                    .with_context(|| format!("writing {}", file.display()))?;
                 if !shell_notes.is_empty() {
                     let file = out.join("bench-shell.md");
                     std::fs::write(&file, &shell_notes)

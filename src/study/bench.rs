@@ -4,7 +4,11 @@
 //! Error = max over the output grid and the displacement/force columns of
 //! |y - y_ref| / max |y_ref| (per column), against the tightest reference
 //! available: IDA at rtol 1e-12 when built with `--features reference`,
-//! otherwise the ANM at order 30, eps 1e-14 (stated in the table).
+//! otherwise diffsol BDF at rtol 1e-12 (stated in the table). The baselines
+//! (IDA, diffsol BDF, diffsol ESDIRK34) run with the set-up of `anm
+//! reference` ([`crate::reference`], README "Fair baselines");
+//! [`fastest_markdown`] gives the fastest setting of each at every error
+//! target and the ANM's time over the best baseline's.
 //! Wall times are the median and the minimum of `repeat` runs; the
 //! head-to-head at an error target ([`super::target`]) times the fastest
 //! settings again, interleaved, with instruction counts. Benchmarks print
@@ -453,10 +457,12 @@ impl Drop for Scratch {
     }
 }
 
-/// The friction work-precision matrix of issue 5: ANM orders 5..30 x eps
-/// 1e-3..1e-10, IDA rtol 1e-3..1e-10 in half decades (with `--features
-/// reference`): IDA has one knob where the ANM has two, so it gets the finer
-/// grid, lest a decade step cost it the fastest setting at a target.
+/// The friction work-precision matrix of issues 5 and 16: ANM orders 5..30
+/// x eps 1e-3..1e-10; the baselines at rtol 1e-3..1e-10 in half decades
+/// (3e-4, 1e-4, …): IDA (with `--features reference`), diffsol BDF and
+/// diffsol ESDIRK34, each with the set-up of `anm reference` (atol = rtol).
+/// A baseline has one knob where the ANM has two, so it gets the finer grid,
+/// lest a decade step cost it the fastest setting at a target.
 pub fn friction_methods(with_ida: bool) -> Vec<Method> {
     let mut m = vec![];
     for order in [5, 10, 15, 20, 30] {
@@ -467,25 +473,95 @@ pub fn friction_methods(with_ida: bool) -> Vec<Method> {
             });
         }
     }
-    if with_ida {
-        for e in 3..=10 {
-            for mantissa in [3.0, 1.0] {
-                if e > 3 || mantissa == 1.0 {
-                    m.push(Method::Ida {
-                        rtol: mantissa * 10f64.powi(-e),
-                    });
-                }
+    let mut rtols = vec![];
+    for e in 3..=10 {
+        for mantissa in [3.0, 1.0] {
+            if e > 3 || mantissa == 1.0 {
+                rtols.push(mantissa * 10f64.powi(-e));
             }
         }
     }
+    if with_ida {
+        m.extend(rtols.iter().map(|&rtol| Method::Ida { rtol }));
+    }
+    for method in [DiffsolMethod::Bdf, DiffsolMethod::Esdirk] {
+        m.extend(rtols.iter().map(|&rtol| Method::Diffsol { method, rtol }));
+    }
     m
+}
+
+/// For each case, error target and method family (label), the fastest
+/// setting reaching the target (by minimum wall time), and the ANM's time
+/// over the fastest baseline's.
+pub fn fastest_markdown(rows: &[BenchRow], targets: &[f64]) -> String {
+    let mut cases: Vec<&str> = rows.iter().map(|r| r.case.as_str()).collect();
+    cases.dedup();
+    let mut families: Vec<&str> = rows.iter().map(|r| r.method.as_str()).collect();
+    families.sort();
+    families.dedup();
+    let mut s = String::from(
+        "| case | error target | method | fastest setting | error | steps | wall min (ms) |\n|---|---|---|---|---|---|---|\n",
+    );
+    let mut verdicts = String::from(
+        "\n| case | error target | fastest ANM (ms) | fastest baseline (ms) | ANM / best baseline |\n|---|---|---|---|---|\n",
+    );
+    for case in &cases {
+        for &target in targets {
+            let best = |family: &str| {
+                rows.iter()
+                    .filter(|r| r.case == *case && r.method == family)
+                    .filter(|r| r.error <= target && r.wall_min_s.is_finite())
+                    .min_by(|a, b| a.wall_min_s.total_cmp(&b.wall_min_s))
+            };
+            let (mut anm, mut base): (Option<&BenchRow>, Option<&BenchRow>) = (None, None);
+            for family in &families {
+                let Some(r) = best(family) else {
+                    if rows.iter().any(|r| r.case == *case && r.method == *family) {
+                        s += &format!("| {case} | {target:.0e} | {family} | none reaches it | – | – | – |\n");
+                    }
+                    continue;
+                };
+                s += &format!(
+                    "| {case} | {target:.0e} | {family} | {} | {:.2e} | {} | {:.3} |\n",
+                    r.setting,
+                    r.error,
+                    r.steps,
+                    1e3 * r.wall_min_s
+                );
+                let slot = if family.starts_with("ANM") {
+                    &mut anm
+                } else {
+                    &mut base
+                };
+                if slot.is_none_or(|b| r.wall_min_s < b.wall_min_s) {
+                    *slot = Some(r);
+                }
+            }
+            let show = |r: Option<&BenchRow>| {
+                r.map_or("none reaches it".to_string(), |r| {
+                    format!("{} {} ({:.3})", r.method, r.setting, 1e3 * r.wall_min_s)
+                })
+            };
+            let ratio = match (anm, base) {
+                (Some(a), Some(b)) => format!("{:.2}", a.wall_min_s / b.wall_min_s),
+                _ => "–".into(),
+            };
+            verdicts += &format!(
+                "| {case} | {target:.0e} | {} | {} | {ratio} |\n",
+                show(anm),
+                show(base)
+            );
+        }
+    }
+    s + &verdicts
 }
 
 /// The reference a friction case is measured against, with the comparison
 /// window and how far the tightest ANM run is from it.
 pub struct Reference {
     pub solution: Solution,
-    /// "IDA rtol=1e-12", or "ANM N=30 eps=1e-14" without the reference feature.
+    /// "IDA rtol=1e-12", or "diffsol BDF rtol=1e-12" without the reference
+    /// feature.
     pub name: String,
     /// Errors are taken on t <= t_max: friction-roller stops 0.05 s before
     /// the breakdown the ANM detects.
@@ -503,7 +579,9 @@ impl Reference {
     }
 }
 
-/// Solves the tightest reference of a friction scene.
+/// Solves the tightest reference of a friction scene: IDA at rtol 1e-12, or
+/// without the reference feature diffsol BDF at rtol 1e-12 (an independent
+/// solver either way, never the ANM).
 pub fn reference(scene: &FrictionScene, with_ida: bool) -> Result<Reference> {
     let tight_anm = Method::Anm {
         order: 30,
@@ -512,7 +590,10 @@ pub fn reference(scene: &FrictionScene, with_ida: bool) -> Result<Reference> {
     let method = if with_ida {
         Method::Ida { rtol: 1e-12 }
     } else {
-        tight_anm.clone()
+        Method::Diffsol {
+            method: DiffsolMethod::Bdf,
+            rtol: 1e-12,
+        }
     };
     let solution = solve(scene, &method)?;
     let anm = solve(scene, &tight_anm)?;
