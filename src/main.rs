@@ -148,16 +148,16 @@ enum ReferenceSolver {
         #[arg(short, long, value_name = "DIR")]
         out: PathBuf,
         /// Relative tolerance.
-        #[arg(long, default_value_t = 1e-10, allow_negative_numbers = true)]
+        #[arg(long, default_value_t = 1e-10, allow_hyphen_values = true)]
         rtol: f64,
         /// Absolute tolerance of the differential unknowns (positions, m);
         /// default: rtol.
-        #[arg(long, allow_negative_numbers = true)]
+        #[arg(long, allow_hyphen_values = true)]
         atol: Option<f64>,
         /// The algebraic unknowns (velocities, forces; u_y on the plane) in
         /// the local error test: `suppress` (default: out of it,
         /// IDASetSuppressAlg) or their absolute tolerance (IDASVtolerances).
-        #[arg(long, default_value = "suppress", allow_negative_numbers = true)]
+        #[arg(long, default_value = "suppress", allow_hyphen_values = true)]
         atol_algebraic: String,
         /// The friction law in the DAE: `product` (R_T Vc^q |w|_reg^(1-q) +
         /// f N w = 0, not steep in w; default) or `direct` (R_T + f N g(w) = 0).
@@ -178,24 +178,24 @@ enum ReferenceSolver {
         #[arg(long, default_value = "bdf")]
         method: String,
         /// Relative tolerance.
-        #[arg(long, default_value_t = 1e-10, allow_negative_numbers = true)]
+        #[arg(long, default_value_t = 1e-10, allow_hyphen_values = true)]
         rtol: f64,
         /// Absolute tolerance of the differential unknowns (positions, m);
         /// default: rtol.
-        #[arg(long, allow_negative_numbers = true)]
+        #[arg(long, allow_hyphen_values = true)]
         atol: Option<f64>,
         /// Absolute tolerance of the algebraic unknowns (diffsol has no
         /// suppress-alg; its error norm covers every unknown).
-        #[arg(long, default_value_t = anm::reference::diffsol::ATOL_ALGEBRAIC, allow_negative_numbers = true)]
+        #[arg(long, default_value_t = anm::reference::diffsol::ATOL_ALGEBRAIC, allow_hyphen_values = true)]
         atol_algebraic: f64,
         /// Newton convergence failures allowed over the whole run (diffsol
         /// counts them per run, not per step; its default is 50).
         #[arg(long, default_value_t = anm::reference::diffsol::MAX_NONLINEAR_FAILURES)]
         max_nonlinear_failures: usize,
-        /// Steps between evaluations of the Jacobian df/dy (diffsol's own
-        /// default is 50; the matrix M - h gamma J is refactored more often).
-        #[arg(long, default_value_t = anm::reference::diffsol::RHS_JACOBIAN_AFTER_STEPS)]
-        rhs_jacobian_after_steps: usize,
+        /// Evaluate df/dy at every step and after every Newton failure
+        /// (`false`: diffsol's defaults, every 50 steps).
+        #[arg(long, default_value_t = anm::reference::diffsol::FRESH_JACOBIAN, action = clap::ArgAction::Set)]
+        fresh_jacobian: bool,
         /// The friction law in the DAE: `product` (default) or `direct`.
         #[arg(long, default_value = "product")]
         friction_row: String,
@@ -203,7 +203,10 @@ enum ReferenceSolver {
 }
 
 /// Loads a friction scene for a reference solver, or says why not.
-fn reference_scene(scene: &std::path::Path, solver: &str) -> anyhow::Result<anm::scene::friction::FrictionScene> {
+fn reference_scene(
+    scene: &std::path::Path,
+    solver: &str,
+) -> anyhow::Result<anm::scene::friction::FrictionScene> {
     let (kind, friction) = load(scene)?;
     let Some(sc) = friction else {
         anyhow::bail!(
@@ -313,7 +316,7 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
                     atol,
                     atol_algebraic,
                     max_nonlinear_failures,
-                    rhs_jacobian_after_steps,
+                    fresh_jacobian,
                     friction_row,
                 },
         } => {
@@ -328,7 +331,7 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
                 tol: Tolerances::new(rtol, atol)?,
                 atol_algebraic,
                 max_nonlinear_failures,
-                rhs_jacobian_after_steps,
+                fresh_jacobian,
                 friction_row: friction_row
                     .parse()
                     .map_err(|e: String| anyhow::anyhow!("--friction-row: {e}"))?,

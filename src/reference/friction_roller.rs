@@ -103,10 +103,7 @@ impl Dae for FrictionRoller {
         r[2] = -k * ux + rn * fr.n[0] + rt * fr.t[0];
         r[3] = -k * uy + rn * fr.n[1] + rt * fr.t[1] - f * t;
         r[4] = gr * rn_rate + gh * vn + self.alpha * c.residual(rn, fr.h);
-        r[5] = self
-            .law
-            .row(rt, nreg, vt + self.spin * self.radius)
-            .0;
+        r[5] = self.law.row(rt, nreg, vt + self.spin * self.radius).0;
     }
     // Index loops mirror the component formulas (rows x, y; columns u_x, u_y).
     #[allow(clippy::needless_range_loop)]

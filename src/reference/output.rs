@@ -68,11 +68,7 @@ pub fn write(run: &IdaRun, dir: &Path) -> Result<()> {
         .iter()
         .map(|s| vec![s.t, s.h, s.slip, s.order as f64])
         .collect();
-    write_csv(
-        &dir.join("steps.csv"),
-        &["t", "h", "slip", "order"],
-        &rows,
-    )?;
+    write_csv(&dir.join("steps.csv"), &["t", "h", "slip", "order"], &rows)?;
     let summary = Summary {
         tool: &run.tool,
         version: &run.version,

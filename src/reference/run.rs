@@ -197,7 +197,6 @@ pub fn model_with(scene: &FrictionScene, form: RowForm) -> Result<Box<dyn Fricti
     })
 }
 
-
 /// Step-collapse diagnosis: this many consecutive steps with
 /// h <= COLLAPSE_H max(|t|, t_end).
 const COLLAPSE_STEPS: usize = 1000;

@@ -18,9 +18,9 @@ use crate::error::Result;
 use crate::model::friction_run::{FrictionRun, run};
 use crate::output::create_dir;
 use crate::output::plot::{Curve, Panel, draw};
-use crate::scene::friction::FrictionScene;
 use crate::reference::diffsol::DiffsolSettings;
 use crate::reference::settings::DiffsolMethod;
+use crate::scene::friction::FrictionScene;
 use crate::series::Stats;
 use std::path::{Path, PathBuf};
 
@@ -130,7 +130,8 @@ pub fn solve(scene: &FrictionScene, method: &Method) -> Result<Solution> {
         }
         Method::Ida { rtol } => ida(scene, *rtol),
         Method::Diffsol { method, rtol } => {
-            let settings = DiffsolSettings::new(*method, *rtol).map_err(|e| study_error(scene, e))?;
+            let settings =
+                DiffsolSettings::new(*method, *rtol).map_err(|e| study_error(scene, e))?;
             let run = crate::reference::diffsol::solve(scene, &settings)
                 .map_err(|e| study_error(scene, e))?;
             Ok(from_reference(run))
@@ -517,7 +518,9 @@ pub fn fastest_markdown(rows: &[BenchRow], targets: &[f64]) -> String {
             for family in &families {
                 let Some(r) = best(family) else {
                     if rows.iter().any(|r| r.case == *case && r.method == *family) {
-                        s += &format!("| {case} | {target:.0e} | {family} | none reaches it | – | – | – |\n");
+                        s += &format!(
+                            "| {case} | {target:.0e} | {family} | none reaches it | – | – | – |\n"
+                        );
                     }
                     continue;
                 };

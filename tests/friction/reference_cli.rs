@@ -24,7 +24,10 @@ fn scratch(name: &str) -> PathBuf {
 fn counters(dir: &Path) -> serde_json::Map<String, serde_json::Value> {
     let text = std::fs::read_to_string(dir.join("summary.json")).expect("summary.json");
     let v: serde_json::Value = serde_json::from_str(&text).expect("json");
-    v["counters"].as_object().expect("a counters object").clone()
+    v["counters"]
+        .as_object()
+        .expect("a counters object")
+        .clone()
 }
 
 /// Item 4: the ANM, diffsol BDF and diffsol ESDIRK write the same counter
@@ -35,8 +38,14 @@ fn summaries_share_counter_names() {
     let scene = "scenes/friction-1d.toml";
     let runs = [
         ("anm", vec!["run", scene, "--quiet", "-o"]),
-        ("bdf", vec!["reference", "diffsol", scene, "--method", "bdf", "-o"]),
-        ("esdirk", vec!["reference", "diffsol", scene, "--method", "esdirk", "-o"]),
+        (
+            "bdf",
+            vec!["reference", "diffsol", scene, "--method", "bdf", "-o"],
+        ),
+        (
+            "esdirk",
+            vec!["reference", "diffsol", scene, "--method", "esdirk", "-o"],
+        ),
     ];
     for (name, mut args) in runs {
         let dir = scratch(name);
@@ -87,8 +96,11 @@ fn bad_reference_options_are_named() {
         (&["--method", "rk4"], "--method"),
         (&["--method", "BDF2"], "--method"),
         (&["--friction-row", "steep"], "--friction-row"),
-        (&["--rhs-jacobian-after-steps", "0"], "--rhs-jacobian-after-steps"),
-        (&["--max-nonlinear-failures", "0"], "--max-nonlinear-failures"),
+        (&["--fresh-jacobian", "maybe"], "--fresh-jacobian"),
+        (
+            &["--max-nonlinear-failures", "0"],
+            "--max-nonlinear-failures",
+        ),
     ];
     for (extra, option) in cases {
         let mut args = vec!["reference", "diffsol", scene, "-o", &d];
@@ -98,7 +110,13 @@ fn bad_reference_options_are_named() {
         println!("{extra:?}: exit {:?}: {}", o.status.code(), err.trim());
         assert!(!o.status.success(), "{extra:?} accepted");
         assert!(!err.contains("panicked"), "{extra:?} panicked: {err}");
-        assert!(err.contains(option), "{extra:?}: message does not name {option}: {err}");
-        assert!(!dir.join("summary.json").exists(), "{extra:?} wrote outputs");
+        assert!(
+            err.contains(option),
+            "{extra:?}: message does not name {option}: {err}"
+        );
+        assert!(
+            !dir.join("summary.json").exists(),
+            "{extra:?} wrote outputs"
+        );
     }
 }
