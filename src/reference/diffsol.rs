@@ -235,7 +235,7 @@ pub fn solve_model(
         message: format!("consistent initialization: {e}"),
         t: 0.0,
     };
-    let run = match settings.method {
+    match settings.method {
         DiffsolMethod::Bdf => {
             let solver = problem.bdf::<LS>().map_err(fail)?;
             run_solver(scene, dae, &problem, solver, &calls, label, start)
@@ -244,8 +244,7 @@ pub fn solve_model(
             let solver = problem.esdirk34::<LS>().map_err(fail)?;
             run_solver(scene, dae, &problem, solver, &calls, label, start)
         }
-    };
-    run
+    }
 }
 
 fn run_solver<'a, Eqn, S>(

@@ -273,15 +273,14 @@ pub fn drive(
             let h = stepper.last_step();
             let order = stepper.order();
             steps.push(StepRecord { t, h, slip, order });
-            if let Some(e) = stepper.weighted_local_errors() {
-                if let Some((i, _)) = e
-                    .iter()
+            if let Some((i, _)) = stepper.weighted_local_errors().and_then(|e| {
+                e.iter()
+                    .copied()
                     .enumerate()
                     .max_by(|a, b| a.1.abs().total_cmp(&b.1.abs()))
-                {
-                    dominant[i] += 1;
-                    have_dominant = true;
-                }
+            }) {
+                dominant[i] += 1;
+                have_dominant = true;
             }
             // A step size at round-off level for many steps in a row: the
             // solver cannot advance (it would only stop at max_steps).
