@@ -98,8 +98,9 @@ impl std::fmt::Display for AlgebraicControl {
 pub enum DiffsolMethod {
     /// Variable-order (1-5) BDF with a singular mass matrix.
     Bdf,
-    /// ESDIRK34: L-stable 4-stage, order 3 with an embedded order-2 error
-    /// estimate (Kennedy & Carpenter's tableau as shipped by diffsol).
+    /// ESDIRK34: the third-order, four-stage ESDIRK method of Jørgensen,
+    /// Kristensen and Thomsen (arXiv:1803.01613), with its embedded error
+    /// estimate, as shipped by diffsol.
     Esdirk,
 }
 
