@@ -24,7 +24,6 @@ pub mod linalg;
 pub mod mesh;
 pub mod model;
 pub mod output;
-#[cfg(feature = "reference")]
 pub mod reference;
 pub mod run;
 pub mod scene;

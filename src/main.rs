@@ -87,12 +87,17 @@ enum Command {
         /// they are installed (factor.md).
         #[arg(long)]
         write_matrix: bool,
-        /// Error target of the head-to-head (target.md): the fastest ANM and
-        /// IDA settings reaching it are timed again, interleaved. A case whose
-        /// two references disagree by more than target / 1.2 is compared at
-        /// 1.2 x their difference.
-        #[arg(long, default_value_t = 1e-8)]
-        target: f64,
+        /// Error targets of the fastest-setting table (fastest.md) and of the
+        /// head-to-head (target.md): the fastest ANM and baseline (IDA,
+        /// diffsol BDF, diffsol ESDIRK) settings reaching each are timed
+        /// again, interleaved. A case whose two references disagree by more
+        /// than target / 1.2 is compared at 1.2 x their difference.
+        #[arg(long, value_delimiter = ',', default_values_t = [1e-6, 1e-8])]
+        target: Vec<f64>,
+        /// Values of zeta (N) at which friction-plane and friction-roller
+        /// are benchmarked, each a case of its own (friction-1d has no zeta).
+        #[arg(long, value_delimiter = ',', default_values_t = [1e-1, 1e-4])]
+        zeta: Vec<f64>,
         /// Interleaved rounds of the head-to-head.
         #[arg(long, default_value_t = 100)]
         rounds: usize,
@@ -115,7 +120,8 @@ enum Command {
     /// `anm::study::timing::instructions`) it gives the instruction count.
     Time {
         scene: PathBuf,
-        /// anm:ORDER:EPS (e.g. anm:15:1e-9) or ida:RTOL (e.g. ida:1e-10).
+        /// anm:ORDER:EPS (e.g. anm:15:1e-9), ida:RTOL (e.g. ida:1e-10),
+        /// diffsol-bdf:RTOL or diffsol-esdirk:RTOL.
         #[arg(long)]
         method: anm::study::bench::Method,
         /// Timed repetitions after a warm-up run; 0: a single run (for callgrind).
@@ -138,8 +144,8 @@ enum Command {
         #[arg(long, default_value_t = 3)]
         repeat: usize,
     },
-    /// Solve a scene with an external reference solver.
-    #[cfg(feature = "reference")]
+    /// Solve a friction scene with an external reference solver (IDA with
+    /// `--features reference`; diffsol always).
     Reference {
         #[command(subcommand)]
         solver: ReferenceSolver,
@@ -192,22 +198,123 @@ struct ItemArgs {
     list_items: bool,
 }
 
-#[cfg(feature = "reference")]
 #[derive(Subcommand)]
 enum ReferenceSolver {
-    /// SUNDIALS IDA on a friction scene's DAE: writes history.csv, ida_steps.csv,
-    /// summary.json and ida_steps.svg into DIR.
+    /// SUNDIALS IDA on a friction scene's DAE: writes history.csv, steps.csv,
+    /// summary.json and steps.svg into DIR.
+    #[cfg(feature = "reference")]
     Ida {
         scene: PathBuf,
         #[arg(short, long, value_name = "DIR")]
         out: PathBuf,
         /// Relative tolerance.
-        #[arg(long, default_value_t = 1e-10)]
+        #[arg(long, default_value_t = 1e-10, allow_hyphen_values = true)]
         rtol: f64,
-        /// Absolute tolerance.
-        #[arg(long, default_value_t = 1e-10)]
-        atol: f64,
+        /// Absolute tolerance of the differential unknowns (positions, m);
+        /// default: rtol.
+        #[arg(long, allow_hyphen_values = true)]
+        atol: Option<f64>,
+        /// The algebraic unknowns (velocities, forces; u_y on the plane) in
+        /// the local error test: `suppress` (default: out of it,
+        /// IDASetSuppressAlg) or their absolute tolerance (IDASVtolerances).
+        #[arg(long, default_value = "suppress", allow_hyphen_values = true)]
+        atol_algebraic: String,
+        /// The friction law in the DAE: `product` (R_T Vc^q |w|_reg^(1-q) +
+        /// f N w = 0, not steep in w; default) or `direct` (R_T + f N g(w) = 0).
+        #[arg(long, default_value = "product")]
+        friction_row: String,
+        /// Newton iterations per step attempt (IDASetMaxNonlinIters; IDA's
+        /// own default is 4).
+        #[arg(long, default_value_t = anm::reference::ida_run::MAX_NONLIN_ITERS)]
+        max_nonlin_iters: usize,
     },
+    /// diffsol (pure Rust, BDF or ESDIRK34, singular mass matrix) on a
+    /// friction scene's DAE: the same outputs as `anm reference ida`.
+    Diffsol {
+        scene: PathBuf,
+        #[arg(short, long, value_name = "DIR")]
+        out: PathBuf,
+        /// `bdf` (variable order 1-5) or `esdirk` (ESDIRK34, order 3).
+        #[arg(long, default_value = "bdf")]
+        method: String,
+        /// Relative tolerance.
+        #[arg(long, default_value_t = 1e-10, allow_hyphen_values = true)]
+        rtol: f64,
+        /// Absolute tolerance of the differential unknowns (positions, m);
+        /// default: rtol.
+        #[arg(long, allow_hyphen_values = true)]
+        atol: Option<f64>,
+        /// Absolute tolerance of the algebraic unknowns (diffsol has no
+        /// suppress-alg; its error norm covers every unknown).
+        #[arg(long, default_value_t = anm::reference::diffsol::ATOL_ALGEBRAIC, allow_hyphen_values = true)]
+        atol_algebraic: f64,
+        /// Newton convergence failures allowed over the whole run (diffsol
+        /// counts them per run, not per step; its default is 50).
+        #[arg(long, default_value_t = anm::reference::diffsol::MAX_NONLINEAR_FAILURES)]
+        max_nonlinear_failures: usize,
+        /// Evaluate df/dy at every step and after every Newton failure
+        /// (`false`: diffsol's defaults, every 50 steps).
+        #[arg(long, default_value_t = anm::reference::diffsol::FRESH_JACOBIAN, action = clap::ArgAction::Set)]
+        fresh_jacobian: bool,
+        /// The friction law in the DAE: `product` (default) or `direct`.
+        #[arg(long, default_value = "product")]
+        friction_row: String,
+    },
+}
+
+/// Loads a friction scene for a reference solver, or says why not.
+fn reference_scene(
+    scene: &std::path::Path,
+    solver: &str,
+) -> anyhow::Result<anm::scene::friction::FrictionScene> {
+    let (kind, friction) = load(scene)?;
+    let Some(sc) = friction else {
+        anyhow::bail!(
+            "{}: {solver} solves the friction scenes only, not `{}`",
+            scene.display(),
+            kind.name()
+        );
+    };
+    Ok(sc)
+}
+
+/// Writes a reference run's outputs, prints its summary line; exit code 2
+/// when it did not reach the end.
+fn reference_report(
+    scene: &std::path::Path,
+    run: &anm::reference::IdaRun,
+    out: &std::path::Path,
+) -> anyhow::Result<ExitCode> {
+    anm::reference::output::write(run, out)?;
+    let c = &run.counters;
+    println!(
+        "{}: {} {} ({}): stop = {} at t = {:.9} s; {} steps ({} at order 1), {} error-test failures, {} convergence failures, {} residual evals, {} Jacobian evals, {} factorizations, {:.3} s; outputs in {}",
+        scene.display(),
+        run.tool,
+        run.version,
+        run.method,
+        run.stop.reason,
+        run.stop.t,
+        c.steps,
+        run.order_one_steps(),
+        c.error_test_failures,
+        c.convergence_failures,
+        c.residual_evaluations,
+        c.jacobian_evaluations,
+        c.factorizations,
+        run.wall_s,
+        out.display()
+    );
+    if let Some(m) = &run.stop.message {
+        println!("  {m}");
+    }
+    if let Some((t1, t10)) = run.surge_window() {
+        println!("  |slip| rises from Vc to 10 Vc over [{t1:.9}, {t10:.9}] s");
+    }
+    Ok(match run.stop.reason.as_str() {
+        "end" => ExitCode::SUCCESS,
+        _ => ExitCode::from(2),
+    })
 }
 
 fn main() -> ExitCode {
@@ -268,43 +375,59 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
                     out,
                     rtol,
                     atol,
+                    atol_algebraic,
+                    friction_row,
+                    max_nonlin_iters,
                 },
         } => {
-            let (kind, friction) = load(&scene)?;
-            let Some(sc) = friction else {
-                anyhow::bail!(
-                    "{}: IDA solves the friction scenes only, not `{}`",
-                    scene.display(),
-                    kind.name()
-                );
+            use anm::reference::settings::{AlgebraicControl, Tolerances};
+            let settings = anm::reference::IdaSettings {
+                tol: Tolerances::new(rtol, atol)?,
+                algebraic: AlgebraicControl::parse("atol-algebraic", &atol_algebraic)?,
+                friction_row: friction_row
+                    .parse()
+                    .map_err(|e: String| anyhow::anyhow!("--friction-row: {e}"))?,
+                max_nonlin_iters,
             };
-            let run = anm::reference::solve(&sc, rtol, atol)
+            let sc = reference_scene(&scene, "IDA")?;
+            let run = anm::reference::solve(&sc, &settings)
                 .with_context(|| format!("IDA on {}", scene.display()))?;
-            anm::reference::output::write(&run, &out)?;
-            let c = &run.counters;
-            println!(
-                "{}: SUNDIALS IDA {}: stop = {} at t = {:.9} s; {} steps, {} residual evals, {} Jacobian evals, {} linear setups, {:.3} s; outputs in {}",
-                scene.display(),
-                run.version,
-                run.stop.reason,
-                run.stop.t,
-                c.steps,
-                c.residual_evals,
-                c.jacobian_evals,
-                c.linear_setups,
-                run.wall_s,
-                out.display()
-            );
-            if let Some(m) = &run.stop.message {
-                println!("  {m}");
-            }
-            if let Some((t1, t10)) = run.surge_window() {
-                println!("  |slip| rises from Vc to 10 Vc over [{t1:.9}, {t10:.9}] s");
-            }
-            Ok(match run.stop.reason.as_str() {
-                "end" => ExitCode::SUCCESS,
-                _ => ExitCode::from(2),
-            })
+            reference_report(&scene, &run, &out)
+        }
+        Command::Reference {
+            solver:
+                ReferenceSolver::Diffsol {
+                    scene,
+                    out,
+                    method,
+                    rtol,
+                    atol,
+                    atol_algebraic,
+                    max_nonlinear_failures,
+                    fresh_jacobian,
+                    friction_row,
+                },
+        } => {
+            use anm::reference::diffsol::DiffsolSettings;
+            use anm::reference::settings::{DiffsolMethod, Tolerances, positive};
+            let method: DiffsolMethod = method
+                .parse()
+                .map_err(|e: String| anyhow::anyhow!("--method: {e}"))?;
+            positive("atol-algebraic", atol_algebraic)?;
+            let settings = DiffsolSettings {
+                method,
+                tol: Tolerances::new(rtol, atol)?,
+                atol_algebraic,
+                max_nonlinear_failures,
+                fresh_jacobian,
+                friction_row: friction_row
+                    .parse()
+                    .map_err(|e: String| anyhow::anyhow!("--friction-row: {e}"))?,
+            };
+            let sc = reference_scene(&scene, "diffsol")?;
+            let run = anm::reference::diffsol::solve(&sc, &settings)
+                .with_context(|| format!("diffsol on {}", scene.display()))?;
+            reference_report(&scene, &run, &out)
         }
         Command::Audit {
             scene,
@@ -332,12 +455,19 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
             scaling_steps,
             write_matrix,
             target,
+            zeta,
             rounds,
             instructions,
             out,
             items,
         } => {
             use anm::study::{bench, target as head};
+            for &z in &zeta {
+                anm::reference::settings::positive("zeta", z)?;
+            }
+            for &t in &target {
+                anm::reference::settings::positive("target", t)?;
+            }
             if !scaling.is_empty() {
                 if out.is_none() && !items.list_items {
                     anyhow::bail!(
@@ -381,36 +511,57 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
                     rows.extend(r);
                     continue;
                 };
-                let reference = bench::reference(&sc, with_ida)?;
-                reference_name = reference.name.clone();
-                eprintln!(
-                    "{case}: reference {reference_name}; ANM(30, 1e-14) differs from it by {:.2e} on t <= {:.4}",
-                    reference.anm_floor, reference.t_max
-                );
-                let methods = bench::friction_methods(with_ida);
-                let r = bench::work_precision(
-                    case,
-                    &sc,
-                    &methods,
-                    &reference.solution,
-                    reference.t_max,
-                    repeat,
-                );
-                print!("{}", bench::markdown(&r, &reference_name));
-                let h = head::head_to_head(
-                    case,
-                    &sc,
-                    &r,
-                    &methods,
-                    reference.target(target),
-                    rounds,
-                    exe.as_deref(),
-                )?;
-                heads.push(h);
-                rows.extend(r);
+                // One case per zeta where zeta enters the equations.
+                let variants: Vec<(String, anm::scene::friction::FrictionScene)> =
+                    if sc.contact.is_some() {
+                        zeta.iter()
+                            .map(|&z| {
+                                let mut s = sc.clone();
+                                s.friction.zeta = Some(z);
+                                (format!("{case} zeta={z:.0e}"), s)
+                            })
+                            .collect()
+                    } else {
+                        vec![(case.clone(), sc)]
+                    };
+                for (name, sc) in variants {
+                    let reference = bench::reference(&sc, with_ida)?;
+                    reference_name = reference.name.clone();
+                    eprintln!(
+                        "{name}: reference {reference_name}; ANM(30, 1e-14) differs from it by {:.2e} on t <= {:.4}",
+                        reference.anm_floor, reference.t_max
+                    );
+                    let methods = bench::friction_methods(with_ida);
+                    let r = bench::work_precision(
+                        &name,
+                        &sc,
+                        &methods,
+                        &reference.solution,
+                        reference.t_max,
+                        repeat,
+                    );
+                    print!("{}", bench::markdown(&r, &reference_name));
+                    print!("\n{}", bench::fastest_markdown(&r, &target));
+                    for &t in &target {
+                        let h = head::head_to_head(
+                            &name,
+                            &sc,
+                            &r,
+                            &methods,
+                            reference.target(t),
+                            rounds,
+                            exe.as_deref(),
+                        )?;
+                        heads.push(h);
+                    }
+                    rows.extend(r);
+                }
             }
             if let Some(out) = &out {
                 bench::write(&rows, &reference_name, out)?;
+                let file = out.join("fastest.md");
+                std::fs::write(&file, bench::fastest_markdown(&rows, &target))
+                    .with_context(|| format!("writing {}", file.display()))?;
                 if !shell_notes.is_empty() {
                     let file = out.join("bench-shell.md");
                     std::fs::write(&file, &shell_notes)

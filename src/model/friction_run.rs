@@ -262,9 +262,14 @@ fn write_outputs(
     Ok(())
 }
 
-/// summary.json: the counters at the top level, then the run's settings.
+/// summary.json: the counters at the top level, the common counters of
+/// every time run ([`crate::reference::counters`], also written by `anm
+/// reference ida|diffsol`), then the run's settings.
 #[derive(Serialize)]
 struct Summary<'a> {
+    tool: &'static str,
+    method: &'static str,
+    counters: crate::reference::counters::Counters,
     steps: usize,
     factorizations: usize,
     solves: usize,
@@ -288,6 +293,9 @@ struct Summary<'a> {
 impl<'a> From<&'a FrictionRun> for Summary<'a> {
     fn from(run: &'a FrictionRun) -> Self {
         Self {
+            tool: "anm",
+            method: "anm",
+            counters: crate::reference::counters::Counters::from_anm(&run.stats),
             steps: run.stats.steps,
             factorizations: run.stats.factorizations,
             solves: run.stats.solves,

@@ -32,6 +32,8 @@ pub trait Dae {
 pub trait FrictionDae: Dae {
     /// history.csv columns, starting with "t" (the same as `anm run`).
     fn columns(&self) -> &'static [&'static str];
+    /// Names of the unknowns y, in order.
+    fn unknowns(&self) -> &'static [&'static str];
     /// Initial guesses (y0, y0') for IDACalcIC at t = 0; the differential
     /// components of y0 are the exact initial state.
     fn initial_guess(&self) -> (Vec<f64>, Vec<f64>);

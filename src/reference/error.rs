@@ -1,5 +1,6 @@
-//! Errors of the IDA reference: a failed SUNDIALS call, with the return
-//! flag's name, the time reached and SUNDIALS' own message.
+//! Errors of the reference solvers: a failed SUNDIALS call, with the return
+//! flag's name, the time reached and SUNDIALS' own message; a diffsol error
+//! with its message; bad input, naming the option.
 
 /// What went wrong in an IDA run.
 #[derive(Debug, Clone, thiserror::Error)]
@@ -20,7 +21,11 @@ pub enum IdaError {
     /// Bad input before any SUNDIALS call.
     #[error("{0}")]
     Input(String),
-    /// A non-finite value in IDA's solution at time t.
+    /// diffsol returned an error at time t (its message says which limit or
+    /// failure).
+    #[error("diffsol: {message} (at t = {t:.12e} s)")]
+    Diffsol { message: String, t: f64 },
+    /// A non-finite value in the solution at time t.
     #[error("non-finite value in {what} at t = {t:.12e} s")]
     NonFinite { what: String, t: f64 },
 }
@@ -29,7 +34,9 @@ impl IdaError {
     /// The time of a failed call (None for setup errors).
     pub fn time(&self) -> Option<f64> {
         match self {
-            IdaError::Flag { t, .. } | IdaError::NonFinite { t, .. } => Some(*t),
+            IdaError::Flag { t, .. }
+            | IdaError::NonFinite { t, .. }
+            | IdaError::Diffsol { t, .. } => Some(*t),
             _ => None,
         }
     }
@@ -41,6 +48,7 @@ impl IdaError {
             IdaError::Null { .. } => "null".into(),
             IdaError::Input(_) => "input".into(),
             IdaError::NonFinite { .. } => "non_finite".into(),
+            IdaError::Diffsol { .. } => "diffsol_error".into(),
         }
     }
 }

@@ -3,8 +3,9 @@
 //!
 //! y = (u, v), u differential, v algebraic:
 //!   F1 = u' - v
-//!   F2 = k u + f R_N g(v - V),  g(w) = |w|_reg^(q-1) w / Vc^q
-//! Index 1: dF2/dv = f R_N g'(v - V) > 0 (g' >= omega^2 Vc^2 ... > 0).
+//!   F2 = P(k u, R_N, v - V) = k u Vc^q |v - V|_reg^(1-q) + f R_N (v - V)
+//! the friction law k u + f R_N g(v - V) = 0, g(w) = |w|_reg^(q-1) w / Vc^q, in the product form of [`Friction::product_row`] (not
+//! steep in v). Index 1: dF2/dv >= q f R_N > 0 on the solution.
 //! Columns t, u, v, rt with rt = -f R_N g(v - V) (= k u on the solution).
 
 use super::dae::{Dae, Dense, FrictionDae};
@@ -27,22 +28,24 @@ impl Dae for Friction1d {
     }
     fn residual(&self, _t: f64, y: &[f64], yp: &[f64], r: &mut [f64]) {
         let (u, v) = (y[0], y[1]);
-        let (g, _) = self.law.shape(v - self.v_plane);
         r[0] = yp[0] - v;
-        r[1] = self.k * u + self.law.f * self.rn * g;
+        r[1] = self.law.row(self.k * u, self.rn, v - self.v_plane).0;
     }
     fn jacobian(&self, _t: f64, cj: f64, y: &[f64], _yp: &[f64], j: &mut Dense) {
-        let (_, dg) = self.law.shape(y[1] - self.v_plane);
+        let (_, d_rt, _, d_w) = self.law.row(self.k * y[0], self.rn, y[1] - self.v_plane);
         j.add(0, 0, cj);
         j.add(0, 1, -1.0);
-        j.add(1, 0, self.k);
-        j.add(1, 1, self.law.f * self.rn * dg);
+        j.add(1, 0, self.k * d_rt);
+        j.add(1, 1, d_w);
     }
 }
 
 impl FrictionDae for Friction1d {
     fn columns(&self) -> &'static [&'static str] {
         &["t", "u", "v", "rt"]
+    }
+    fn unknowns(&self) -> &'static [&'static str] {
+        &["u", "v"]
     }
     fn initial_guess(&self) -> (Vec<f64>, Vec<f64>) {
         (vec![self.u0, self.v_plane], vec![self.v_plane, 0.0])

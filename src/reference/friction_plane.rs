@@ -7,7 +7,10 @@
 //!   F3 = -k u_y + R_N - F t                            (10b)
 //!   F4 = G(R_N, h) = R_N (R_N/K + h) - eta (delta - h), h = delta + u_y   (10c)
 //!   F5 = (k G_R + G_h) v_y + G_R F                     (d/dt of 10b, 10c)
-//!   F6 = R_T + f |R_N|_reg g(v_x - V)                  (10d with 11)
+//!   F6 = P(R_T, |R_N|_reg, v_x - V)                      (10d with 11)
+//! where P = R_T Vc^q |w|_reg^(1-q) + f N w is the friction law R_T +
+//! f N g(w) = 0 in the product form of [`Friction::product_row`] (not
+//! steep in v_x).
 //! with G_R = 2 R_N/K + h, G_h = R_N + eta.
 //!
 //! Why u_y is algebraic: the normal equations (10b, 10c) fix u_y and R_N at
@@ -15,7 +18,7 @@
 //! equations acting on the one algebraic unknown R_N: index 2. With u_y
 //! algebraic, the algebraic block d(F2..F6)/d(u_y, v_x, v_y, R_N, R_T) is
 //! nonsingular (det of the normal block -(k G_R + G_h) != 0, the friction row
-//! has f |R_N|_reg g' > 0): index 1. v_y is not u_y's BDF derivative but the
+//! has dP/dv_x >= q f |R_N|_reg > 0): index 1. v_y is not u_y's BDF derivative but the
 //! exact time derivative of the normal equations: R_N' = k v_y + F and
 //! G_R R_N' + G_h v_y = 0 give F5, an algebraic equation solved to IDA's
 //! tolerance like the others.
@@ -44,23 +47,22 @@ impl Dae for FrictionPlane {
         let c = &self.contact;
         let h = c.delta + uy;
         let (gr, gh) = (c.d_force(rn, h), c.d_gap(rn));
-        let (g, _) = self.law.shape(vx - self.v_plane);
         let (nreg, _) = self.law.normal(rn);
         r[0] = yp[0] - vx;
         r[1] = -k * ux + rt;
         r[2] = -k * uy + rn - f * t;
         r[3] = c.residual(rn, h);
         r[4] = (k * gr + gh) * vy + gr * f;
-        r[5] = rt + self.law.f * nreg * g;
+        r[5] = self.law.row(rt, nreg, vx - self.v_plane).0;
     }
     fn jacobian(&self, _t: f64, cj: f64, y: &[f64], _yp: &[f64], j: &mut Dense) {
-        let [_, uy, vx, vy, rn, _] = [y[0], y[1], y[2], y[3], y[4], y[5]];
+        let [_, uy, vx, vy, rn, rt] = [y[0], y[1], y[2], y[3], y[4], y[5]];
         let (k, f) = (self.k, self.load_rate);
         let c = &self.contact;
         let h = c.delta + uy;
         let (gr, gh) = (c.d_force(rn, h), c.d_gap(rn));
-        let (g, dg) = self.law.shape(vx - self.v_plane);
         let (nreg, dnreg) = self.law.normal(rn);
+        let (_, d_rt, d_n, d_w) = self.law.row(rt, nreg, vx - self.v_plane);
         // F1
         j.add(0, 0, cj);
         j.add(0, 2, -1.0);
@@ -78,15 +80,18 @@ impl Dae for FrictionPlane {
         j.add(4, 3, k * gr + gh);
         j.add(4, 4, (2.0 * k / c.k + 1.0) * vy + 2.0 * f / c.k);
         // F6
-        j.add(5, 2, self.law.f * nreg * dg);
-        j.add(5, 4, self.law.f * dnreg * g);
-        j.add(5, 5, 1.0);
+        j.add(5, 2, d_w);
+        j.add(5, 4, d_n * dnreg);
+        j.add(5, 5, d_rt);
     }
 }
 
 impl FrictionDae for FrictionPlane {
     fn columns(&self) -> &'static [&'static str] {
         &["t", "ux", "uy", "vx", "vy", "rn", "rt"]
+    }
+    fn unknowns(&self) -> &'static [&'static str] {
+        &["ux", "uy", "vx", "vy", "rn", "rt"]
     }
     fn initial_guess(&self) -> (Vec<f64>, Vec<f64>) {
         // At rest on the moving plane's speed; R_N = R_T = 0.
@@ -118,6 +123,7 @@ mod tests {
                 vc: 1.0,
                 omega: 0.1,
                 zeta: 0.1,
+                form: super::super::laws::RowForm::Product,
             },
             contact: Contact {
                 k: 1e3,

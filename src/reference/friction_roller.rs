@@ -8,7 +8,9 @@
 //! Equations of the quasi-static problem:
 //!   equilibrium  -k u + R_N n + R_T t + L = 0        (2 Cartesian components)
 //!   contact      G(R_N, h) = R_N (R_N/K + h) - eta (delta - h) = 0
-//!   friction     R_T + f |R_N|_reg g(v_s) = 0
+//!   friction     R_T + f |R_N|_reg g(v_s) = 0, written in the product form
+//!                P(R_T, |R_N|_reg, v_s) = 0 of [`Friction::product_row`]
+//!                (not steep in v_s)
 //!
 //! ## Index-1 form
 //! Unknowns y = (u_x, u_y, v_x, v_y, R_N, R_T), u differential (u' = v), the
@@ -27,7 +29,7 @@
 //! gives R_N' = k v.n + R_T v.t / rho + F n_y. The row in v of this equation
 //! is (k G_R + G_h) n + G_R R_T / rho t and that of the friction law is
 //! f |R_N|_reg g'(v_s) t, so in the (n, t) basis the velocity block is upper
-//! triangular with diagonal (k G_R + G_h, f |R_N|_reg g') != 0: the algebraic
+//! triangular with diagonal (k G_R + G_h, dP/dv_s) != 0: the algebraic
 //! block is nonsingular, index 1. Consistent initial values satisfy G = 0
 //! (at t = 0: u = 0, h = delta, R_N = 0), and G = 0 for all t is then the
 //! exact solution of dG/dt + alpha G = 0; alpha only damps the drift that
@@ -95,14 +97,13 @@ impl Dae for FrictionRoller {
         let (vn, vt) = (dot(v, fr.n), dot(v, fr.t));
         let (gr, gh) = (c.d_force(rn, fr.h), c.d_gap(rn));
         let rn_rate = k * vn + rt * vt / fr.rho + f * fr.n[1];
-        let (g, _) = self.law.shape(vt + self.spin * self.radius);
         let (nreg, _) = self.law.normal(rn);
         r[0] = yp[0] - vx;
         r[1] = yp[1] - vy;
         r[2] = -k * ux + rn * fr.n[0] + rt * fr.t[0];
         r[3] = -k * uy + rn * fr.n[1] + rt * fr.t[1] - f * t;
         r[4] = gr * rn_rate + gh * vn + self.alpha * c.residual(rn, fr.h);
-        r[5] = rt + self.law.f * nreg * g;
+        r[5] = self.law.row(rt, nreg, vt + self.spin * self.radius).0;
     }
     // Index loops mirror the component formulas (rows x, y; columns u_x, u_y).
     #[allow(clippy::needless_range_loop)]
@@ -115,8 +116,8 @@ impl Dae for FrictionRoller {
         let (vn, vt) = (dot(v, n), dot(v, t));
         let (gr, gh) = (c.d_force(rn, h), c.d_gap(rn));
         let a = k * vn + rt * vt / rho + f * n[1];
-        let (g, dg) = self.law.shape(vt + self.spin * self.radius);
         let (nreg, dnreg) = self.law.normal(rn);
+        let (_, d_rt, d_n, d_w) = self.law.row(rt, nreg, vt + self.spin * self.radius);
         // dn/du = t t^T / rho, dt/du = -n t^T / rho, drho/du = n,
         // d(v.n)/du = v.t t / rho, d(v.t)/du = -v.n t / rho.
         j.add(0, 0, cj);
@@ -152,20 +153,22 @@ impl Dae for FrictionRoller {
         }
         j.add(4, 4, 2.0 / c.k * a + vn + self.alpha * gr);
         j.add(4, 5, gr * vt / rho);
-        // Friction law.
-        let s = self.law.f * nreg * dg;
+        // Friction law (product form), w = v.t + Omega r.
         for col in 0..2 {
-            j.add(5, col, -s * vn * t[col] / rho);
-            j.add(5, 2 + col, s * t[col]);
+            j.add(5, col, -d_w * vn * t[col] / rho);
+            j.add(5, 2 + col, d_w * t[col]);
         }
-        j.add(5, 4, self.law.f * dnreg * g);
-        j.add(5, 5, 1.0);
+        j.add(5, 4, d_n * dnreg);
+        j.add(5, 5, d_rt);
     }
 }
 
 impl FrictionDae for FrictionRoller {
     fn columns(&self) -> &'static [&'static str] {
         &["t", "ux", "uy", "vx", "vy", "rn", "rt"]
+    }
+    fn unknowns(&self) -> &'static [&'static str] {
+        &["ux", "uy", "vx", "vy", "rn", "rt"]
     }
     fn initial_guess(&self) -> (Vec<f64>, Vec<f64>) {
         // At the top, t = e_x: moving with the roller's surface, v = (-Omega r, 0).
@@ -203,6 +206,7 @@ mod tests {
                 vc: 1.0,
                 omega: 0.1,
                 zeta: 0.1,
+                form: super::super::laws::RowForm::Product,
             },
             contact: Contact {
                 k: 1e3,

@@ -281,6 +281,30 @@ impl<'a> Ida<'a> {
         self.check("IDASetMaxNumSteps", rc)
     }
 
+    /// IDASetMaxNonlinIters: Newton iterations per step attempt (IDA's default 4).
+    pub fn set_max_nonlin_iters(&mut self, iters: i32) -> Result<(), IdaError> {
+        // SAFETY: mem is valid.
+        let rc = unsafe { sys::IDASetMaxNonlinIters(self.mem, iters as c_int) };
+        self.check("IDASetMaxNonlinIters", rc)
+    }
+
+    /// IDASetMaxConvFails: Newton convergence failures allowed in one step
+    /// (IDA's default 10).
+    pub fn set_max_conv_fails(&mut self, fails: i32) -> Result<(), IdaError> {
+        // SAFETY: mem is valid.
+        let rc = unsafe { sys::IDASetMaxConvFails(self.mem, fails as c_int) };
+        self.check("IDASetMaxConvFails", rc)
+    }
+
+    /// IDASetNonlinConvCoef: the Newton iteration stops when its estimated
+    /// error is below this fraction of the error-test tolerance (IDA's
+    /// default 0.33).
+    pub fn set_nonlin_conv_coef(&mut self, coef: f64) -> Result<(), IdaError> {
+        // SAFETY: mem is valid.
+        let rc = unsafe { sys::IDASetNonlinConvCoef(self.mem, coef) };
+        self.check("IDASetNonlinConvCoef", rc)
+    }
+
     /// IDASetStopTime: IDA will not step past tstop.
     pub fn set_stop_time(&mut self, tstop: f64) -> Result<(), IdaError> {
         // SAFETY: mem is valid.
@@ -393,9 +417,25 @@ impl<'a> Ida<'a> {
         (rc == 0).then_some(t)
     }
 
-    /// IDASetSuppressAlg: exclude the algebraic components from the local
-    /// error test (SUNDIALS discourages this for index-1 systems; not used by
-    /// [`crate::reference::solve`]).
+    /// IDASVtolerances: rtol and one atol per unknown.
+    pub fn set_vector_tolerances(&mut self, rtol: f64, atol: &[f64]) -> Result<(), IdaError> {
+        if atol.len() != self.n {
+            return Err(IdaError::Input(format!(
+                "{} absolute tolerances for {} unknowns",
+                atol.len(),
+                self.n
+            )));
+        }
+        // SAFETY: work is our vector of length n; IDASVtolerances copies it.
+        unsafe {
+            slice_mut(self.work, self.n).copy_from_slice(atol);
+            let rc = sys::IDASVtolerances(self.mem, rtol, self.work);
+            self.check("IDASVtolerances", rc)
+        }
+    }
+
+    /// IDASetSuppressAlg: exclude the algebraic components (id = 0) from the
+    /// local error test (see [`super::ida_run`] for why the reference does).
     pub fn set_suppress_alg(&mut self, suppress: bool) -> Result<(), IdaError> {
         // SAFETY: mem is valid.
         let rc = unsafe { sys::IDASetSuppressAlg(self.mem, suppress as c_int) };

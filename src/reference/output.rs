@@ -1,8 +1,10 @@
-//! Outputs of `anm reference ida`: history.csv (the columns of `anm run`),
-//! ida_steps.csv (t, h, slip, order of every internal step), summary.json and
-//! ida_steps.svg (step size and |slip speed| against time, log y axes).
+//! Outputs of `anm reference ida|diffsol`: history.csv (the columns of `anm
+//! run`), steps.csv (t, h, slip, order of every internal step), summary.json
+//! (the common counters of [`super::counters`] under `"counters"`, the
+//! settings, how the run stopped) and steps.svg (step size and |slip speed|
+//! against time, log y axes).
 
-use super::ida::Counters;
+use super::counters::Counters;
 use super::run::{Crossing, IdaRun, IdaStop};
 use crate::error::Result;
 use crate::output::plot::{Curve, Panel, draw};
@@ -12,14 +14,25 @@ use std::path::Path;
 
 #[derive(Serialize)]
 struct Summary<'a> {
-    tool: &'static str,
+    tool: &'a str,
     version: &'a str,
-    method: &'static str,
+    method: &'a str,
     scene: &'a str,
     kind: &'a str,
     rtol: f64,
+    /// atol of the differential unknowns.
     atol: f64,
+    /// "suppress" (algebraic unknowns out of the error test) or their atol.
+    algebraic: &'a str,
+    /// Other settings departing from the library's defaults.
+    options: std::collections::BTreeMap<&'a str, &'a str>,
     counters: &'a Counters,
+    /// Steps taken at order 1.
+    order_one_steps: usize,
+    /// Per unknown: accepted steps on which it had the largest weighted local
+    /// error estimate (IDA only: which variable limits the step).
+    #[serde(skip_serializing_if = "std::collections::BTreeMap::is_empty")]
+    dominant_error: std::collections::BTreeMap<&'a str, usize>,
     wall_s: f64,
     stop: &'a IdaStop,
     columns: &'a [String],
@@ -55,20 +68,29 @@ pub fn write(run: &IdaRun, dir: &Path) -> Result<()> {
         .iter()
         .map(|s| vec![s.t, s.h, s.slip, s.order as f64])
         .collect();
-    write_csv(
-        &dir.join("ida_steps.csv"),
-        &["t", "h", "slip", "order"],
-        &rows,
-    )?;
+    write_csv(&dir.join("steps.csv"), &["t", "h", "slip", "order"], &rows)?;
     let summary = Summary {
-        tool: "SUNDIALS IDA",
+        tool: &run.tool,
         version: &run.version,
-        method: "variable-order BDF, dense direct linear solver, analytic Jacobian",
+        method: &run.method,
         scene: &run.scene,
         kind: &run.kind,
         rtol: run.rtol,
         atol: run.atol,
+        algebraic: &run.algebraic,
+        options: run
+            .options
+            .iter()
+            .map(|(k, v)| (k.as_str(), v.as_str()))
+            .collect(),
         counters: &run.counters,
+        order_one_steps: run.order_one_steps(),
+        dominant_error: run
+            .unknowns
+            .iter()
+            .zip(&run.dominant_error)
+            .map(|(k, v)| (k.as_str(), *v))
+            .collect(),
         wall_s: run.wall_s,
         stop: &run.stop,
         columns: &run.columns,
@@ -86,15 +108,15 @@ pub fn write(run: &IdaRun, dir: &Path) -> Result<()> {
     };
     write_json(&dir.join("summary.json"), &summary)?;
     if !run.steps.is_empty() {
-        plot(run, &dir.join("ida_steps.svg"))?;
+        plot(run, &dir.join("steps.svg"))?;
     }
     Ok(())
 }
 
 fn plot(run: &IdaRun, path: &Path) -> Result<()> {
     let title = format!(
-        "{} — SUNDIALS IDA {} (rtol {:e}) — stop: {} at t = {:.6} s",
-        run.kind, run.version, run.rtol, run.stop.reason, run.stop.t
+        "{} — {} {} {} (rtol {:e}) — stop: {} at t = {:.6} s",
+        run.kind, run.tool, run.version, run.method, run.rtol, run.stop.reason, run.stop.t
     );
     let panels = [
         Panel {

@@ -1,30 +1,31 @@
-//! Solves a friction scene with IDA: consistent initial values by IDACalcIC,
-//! then IDA_ONE_STEP steps up to t_end (IDASetStopTime), recording every
-//! internal step (t, h, slip speed, order), interpolating the scene's output
-//! grid with IDAGetDky, and locating by bisection on the dense output the
-//! first times |v_s| reaches Vc and 10 Vc.
+//! The time loop shared by the reference solvers (IDA, diffsol): from the
+//! consistent initial values, one internal step at a time up to t_end,
+//! recording every step (t, h, slip speed, order), the scene's output grid
+//! from the solver's own interpolant, the first times |v_s| reaches Vc and
+//! 10 Vc (bisection on the interpolant), and which unknown dominates the
+//! local error estimate. A solver plugs in through [`Stepper`].
 
+use super::counters::Counters;
 use super::dae::FrictionDae;
 use super::error::IdaError;
 use super::friction_1d::Friction1d;
 use super::friction_plane::FrictionPlane;
 use super::friction_roller::{BAUMGARTE_ALPHA, FrictionRoller};
-use super::ida::{Counters, Ida, Task, sundials_version};
-use super::laws::{Contact, Friction};
+use super::laws::{Contact, Friction, RowForm};
 use crate::scene::Kind;
 use crate::scene::friction::{FrictionScene, Obstacle};
 use std::time::Instant;
 
-/// One internal IDA step.
+/// One internal step.
 #[derive(Clone, Copy, Debug, serde::Serialize)]
 pub struct StepRecord {
     /// Time at the end of the step.
     pub t: f64,
-    /// Its size (IDAGetLastStep).
+    /// Its size.
     pub h: f64,
     /// Slip speed v_s at t.
     pub slip: f64,
-    /// BDF order used (IDAGetLastOrder).
+    /// Order of the method on this step (BDF order; 3 for ESDIRK34).
     pub order: i32,
 }
 
@@ -38,27 +39,58 @@ pub struct Crossing {
 /// How the run ended.
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct IdaStop {
-    /// "end", or the name of the flag IDA failed with (e.g. IDA_CONV_FAIL).
+    /// "end", "max_steps", "step_collapse", or the solver's failure (IDA's
+    /// flag name, e.g. IDA_CONV_FAIL; diffsol's error kind).
     pub reason: String,
     /// The time reached.
     pub t: f64,
     pub message: Option<String>,
 }
 
-/// Everything an IDA run of a friction scene produced.
+/// What a solver run in the loop of [`drive`] must offer.
+pub trait Stepper {
+    /// One internal step, not beyond `t_end`; returns the time reached.
+    fn step(&mut self, t_end: f64) -> Result<f64, IdaError>;
+    /// The solution at the time last reached.
+    fn y(&self) -> Vec<f64>;
+    /// The size of the last step.
+    fn last_step(&self) -> f64;
+    /// The order of the last step.
+    fn order(&self) -> i32;
+    /// The solver's dense output at t within the last step.
+    fn interpolate(&mut self, t: f64) -> Result<Vec<f64>, IdaError>;
+    /// Each unknown's share of the weighted local error estimate of the last
+    /// step, when the solver exposes it (the largest is the unknown that
+    /// limits the step).
+    fn weighted_local_errors(&mut self) -> Option<Vec<f64>> {
+        None
+    }
+    /// The common counters so far.
+    fn counters(&self) -> Counters;
+}
+
+/// Everything a reference run of a friction scene produced.
 #[derive(Clone, Debug)]
 pub struct IdaRun {
     pub scene: String,
     pub kind: String,
+    /// "SUNDIALS IDA" or "diffsol".
+    pub tool: String,
     pub version: String,
+    /// The integrator, e.g. "bdf" (IDA's variable-order BDF), "esdirk".
+    pub method: String,
     pub rtol: f64,
     pub atol: f64,
+    /// How the algebraic unknowns enter the error test ("suppress" or their atol).
+    pub algebraic: String,
+    /// Every other setting that departs from the library's defaults.
+    pub options: Vec<(String, String)>,
     pub columns: Vec<String>,
     /// Rows on the scene's output grid up to the time reached.
     pub history: Vec<Vec<f64>>,
     /// Every internal step.
     pub steps: Vec<StepRecord>,
-    /// Consistent initial values found by IDACalcIC.
+    /// Consistent initial values.
     pub y0: Vec<f64>,
     pub yp0: Vec<f64>,
     pub counters: Counters,
@@ -71,6 +103,11 @@ pub struct IdaRun {
     /// Largest |position-level constraint residual| seen at the steps (N m;
     /// the roller's contact law, enforced in differentiated form).
     pub max_constraint_drift: f64,
+    /// Names of the unknowns, in the solver's order.
+    pub unknowns: Vec<String>,
+    /// For each unknown, the accepted steps on which it had the largest
+    /// weighted local error estimate (empty when the solver does not expose it).
+    pub dominant_error: Vec<usize>,
 }
 
 impl IdaRun {
@@ -81,6 +118,11 @@ impl IdaRun {
             .filter(|s| s.t >= t_from)
             .min_by(|a, b| a.h.total_cmp(&b.h))
             .copied()
+    }
+
+    /// Steps taken at order 1.
+    pub fn order_one_steps(&self) -> usize {
+        self.steps.iter().filter(|s| s.order == 1).count()
     }
 
     /// The window [t(|v_s| = Vc), t(|v_s| = 10 Vc)]: the first up-crossing of
@@ -104,7 +146,15 @@ impl IdaRun {
 /// The IDA model of a friction scene, written independently of
 /// [`crate::model::friction`] (global Cartesian coordinates).
 pub fn model(scene: &FrictionScene) -> Result<Box<dyn FrictionDae>, IdaError> {
-    let law = Friction::from_law(&scene.friction);
+    model_with(scene, RowForm::Product)
+}
+
+/// As [`model`], with the friction row written in `form`.
+pub fn model_with(scene: &FrictionScene, form: RowForm) -> Result<Box<dyn FrictionDae>, IdaError> {
+    let law = Friction {
+        form,
+        ..Friction::from_law(&scene.friction)
+    };
     let contact = || {
         scene
             .contact
@@ -147,82 +197,93 @@ pub fn model(scene: &FrictionScene) -> Result<Box<dyn FrictionDae>, IdaError> {
     })
 }
 
-/// Internal steps allowed per IDASolve call (one call per step here, so this
-/// only bounds the steps between stop-time returns).
-const MAX_STEPS: i64 = 10_000_000;
 /// Step-collapse diagnosis: this many consecutive steps with
 /// h <= COLLAPSE_H max(|t|, t_end).
 const COLLAPSE_STEPS: usize = 1000;
 const COLLAPSE_H: f64 = 1e-13;
 /// Internal steps allowed in a whole run.
-const MAX_TOTAL_STEPS: usize = 2_000_000;
+pub const MAX_TOTAL_STEPS: usize = 2_000_000;
 
-/// Solves the scene with IDA at tolerances (rtol, atol).
-///
-/// Errors are returned for failures before the first step (setup, initial
-/// conditions); a failure during the integration ends the run with
-/// `stop.reason` = the flag name and the rows reached so far.
-pub fn solve(scene: &FrictionScene, rtol: f64, atol: f64) -> Result<IdaRun, IdaError> {
-    let dae = model(scene)?;
-    solve_model(scene, dae.as_ref(), rtol, atol)
+/// Who ran: the tool, its version, method and settings (for [`IdaRun`]).
+pub struct Label {
+    pub tool: &'static str,
+    pub version: String,
+    pub method: String,
+    pub rtol: f64,
+    pub atol: f64,
+    pub algebraic: String,
+    pub options: Vec<(String, String)>,
 }
 
-/// As [`solve`], with a given model (e.g. a modified formulation).
-pub fn solve_model(
+/// Runs `stepper` (already at its consistent initial values (y0, yp0) at
+/// t = 0) over the scene's time span. A failure during the integration ends
+/// the run with `stop.reason` = the failure and the rows reached so far.
+pub fn drive(
     scene: &FrictionScene,
     dae: &dyn FrictionDae,
-    rtol: f64,
-    atol: f64,
-) -> Result<IdaRun, IdaError> {
-    let start = Instant::now();
+    stepper: &mut dyn Stepper,
+    y0: Vec<f64>,
+    yp0: Vec<f64>,
+    label: Label,
+    start: Instant,
+) -> IdaRun {
     let grid = scene.output_times();
     let t_end = scene.t_end;
     let vc = scene.friction.vc;
     let levels = [vc, 10.0 * vc];
-    let (y0, yp0) = dae.initial_guess();
-    let mut ida = Ida::new(dae, 0.0, &y0, &yp0, rtol, atol)?;
-    ida.set_max_num_steps(MAX_STEPS)?;
-    ida.set_stop_time(t_end)?;
-    let (y0, yp0) = ida.calc_ic(grid.get(1).copied().unwrap_or(t_end))?;
-
+    let n = y0.len();
     let mut history = vec![dae.row(0.0, &y0)];
     let mut next = 1;
     let mut steps = Vec::new();
     let mut crossings = Vec::new();
     let mut prev = (0.0, dae.slip(0.0, &y0).abs());
     let mut drift = dae.constraint_drift(0.0, &y0).abs();
+    let mut dominant = vec![0usize; n];
+    let mut have_dominant = false;
     let mut stop = IdaStop {
         reason: "end".into(),
         t: t_end,
         message: None,
     };
+    let mut t_now = 0.0;
     let mut tiny = 0;
     let result: Result<(), IdaError> = (|| {
-        while ida.t() < t_end {
+        while t_now < t_end {
             if steps.len() >= MAX_TOTAL_STEPS {
                 stop = IdaStop {
                     reason: "max_steps".into(),
-                    t: ida.t(),
+                    t: t_now,
                     message: Some(format!(
-                        "{MAX_TOTAL_STEPS} internal steps reached at t = {:.12e} s (last step {:.3e} s)",
-                        ida.t(),
-                        ida.last_step()
+                        "{MAX_TOTAL_STEPS} internal steps reached at t = {t_now:.12e} s (last step {:.3e} s)",
+                        stepper.last_step()
                     )),
                 };
                 return Ok(());
             }
-            let t = ida.solve(t_end, Task::OneStep)?;
-            let y = ida.y().to_vec();
+            let t = stepper.step(t_end)?;
+            t_now = t;
+            let y = stepper.y();
+            if let Some(i) = y.iter().position(|v| !v.is_finite()) {
+                return Err(IdaError::NonFinite {
+                    what: format!("y[{i}]"),
+                    t,
+                });
+            }
             let slip = dae.slip(t, &y);
-            let h = ida.last_step();
-            steps.push(StepRecord {
-                t,
-                h,
-                slip,
-                order: ida.last_order(),
-            });
-            // A step size at round-off level for many steps in a row: IDA
-            // cannot advance (it would only stop at max_steps).
+            let h = stepper.last_step();
+            let order = stepper.order();
+            steps.push(StepRecord { t, h, slip, order });
+            if let Some((i, _)) = stepper.weighted_local_errors().and_then(|e| {
+                e.iter()
+                    .copied()
+                    .enumerate()
+                    .max_by(|a, b| a.1.abs().total_cmp(&b.1.abs()))
+            }) {
+                dominant[i] += 1;
+                have_dominant = true;
+            }
+            // A step size at round-off level for many steps in a row: the
+            // solver cannot advance (it would only stop at max_steps).
             if h <= COLLAPSE_H * t.abs().max(t_end) {
                 tiny += 1;
             } else {
@@ -233,18 +294,21 @@ pub fn solve_model(
                     reason: "step_collapse".into(),
                     t,
                     message: Some(format!(
-                        "IDA's step size collapsed: {COLLAPSE_STEPS} steps in a row below {COLLAPSE_H:e} t_end, last h = {h:.3e} s at t = {t:.12e} s, slip speed {slip:.6e} m/s (BDF order {})",
-                        ida.last_order()
+                        "the step size collapsed: {COLLAPSE_STEPS} steps in a row below {COLLAPSE_H:e} t_end, last h = {h:.3e} s at t = {t:.12e} s, slip speed {slip:.6e} m/s (order {order})"
                     )),
                 };
                 return Ok(());
             }
             drift = drift.max(dae.constraint_drift(t, &y).abs());
-            // Output rows within this step, from IDA's interpolant.
+            // Output rows within this step, from the solver's interpolant.
             let t_prev = prev.0;
             while next < grid.len() && grid[next] <= t + 1e-12 * t_end {
                 let tg = grid[next].min(t);
-                let yg = if tg == t { y.clone() } else { ida.dky(tg, 0)? };
+                let yg = if tg == t {
+                    y.clone()
+                } else {
+                    stepper.interpolate(tg)?
+                };
                 history.push(dae.row(grid[next], &yg));
                 next += 1;
             }
@@ -257,7 +321,7 @@ pub fn solve_model(
                         if m <= a || m >= b {
                             break;
                         }
-                        if dae.slip(m, &ida.dky(m, 0)?).abs() >= level {
+                        if dae.slip(m, &stepper.interpolate(m)?).abs() >= level {
                             b = m;
                         } else {
                             a = m;
@@ -273,28 +337,34 @@ pub fn solve_model(
     if let Err(e) = result {
         stop = IdaStop {
             reason: e.reason(),
-            t: e.time().unwrap_or(ida.t()),
+            t: e.time().unwrap_or(t_now),
             message: Some(e.to_string()),
         };
     } else if stop.reason == "end" {
-        stop.t = ida.t();
+        stop.t = t_now;
     }
-    Ok(IdaRun {
+    IdaRun {
         scene: scene.file.display().to_string(),
         kind: scene.kind.name().into(),
-        version: sundials_version(),
-        rtol,
-        atol,
+        tool: label.tool.into(),
+        version: label.version,
+        method: label.method,
+        rtol: label.rtol,
+        atol: label.atol,
+        algebraic: label.algebraic,
+        options: label.options,
         columns: dae.columns().iter().map(|s| s.to_string()).collect(),
         history,
         steps,
         y0,
         yp0,
-        counters: ida.counters(),
+        counters: stepper.counters(),
         wall_s: start.elapsed().as_secs_f64(),
         stop,
         crossings,
         vc,
         max_constraint_drift: drift,
-    })
+        unknowns: dae.unknowns().iter().map(|s| s.to_string()).collect(),
+        dominant_error: if have_dominant { dominant } else { vec![] },
+    }
 }

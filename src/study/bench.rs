@@ -1,10 +1,15 @@
 //! Work-precision benchmarks: error against wall time for each method and
 //! setting, with the cost counters and the per-step breakdown.
 //!
-//! Error = max over the output grid and the displacement/force columns of
-//! |y - y_ref| / max |y_ref| (per column), against the tightest reference
+//! Error = max over the output grid and the position columns of
+//! |y - y_ref| / max |y_ref| (per column; [`error`]; every column in
+//! [`error_all`]), against the tightest reference
 //! available: IDA at rtol 1e-12 when built with `--features reference`,
-//! otherwise the ANM at order 30, eps 1e-14 (stated in the table).
+//! otherwise diffsol BDF at rtol 1e-12 (stated in the table). The baselines
+//! (IDA, diffsol BDF, diffsol ESDIRK34) run with the set-up of `anm
+//! reference` ([`crate::reference`], README "Fair baselines");
+//! [`fastest_markdown`] gives the fastest setting of each at every error
+//! target and the ANM's time over the best baseline's.
 //! Wall times are the median and the minimum of `repeat` runs; the
 //! head-to-head at an error target ([`super::target`]) times the fastest
 //! settings again, interleaved, with instruction counts. Benchmarks print
@@ -14,6 +19,8 @@ use crate::error::Result;
 use crate::model::friction_run::{FrictionRun, run};
 use crate::output::create_dir;
 use crate::output::plot::{Curve, Panel, draw};
+use crate::reference::diffsol::DiffsolSettings;
+use crate::reference::settings::DiffsolMethod;
 use crate::scene::friction::FrictionScene;
 use crate::series::Stats;
 use std::path::{Path, PathBuf};
@@ -21,8 +28,21 @@ use std::path::{Path, PathBuf};
 /// A method and its accuracy setting.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Method {
-    Anm { order: usize, eps: f64 },
-    Ida { rtol: f64 },
+    Anm {
+        order: usize,
+        eps: f64,
+    },
+    /// IDA with the tuned set-up of `anm reference ida` (atol = rtol,
+    /// algebraic unknowns out of the error test).
+    Ida {
+        rtol: f64,
+    },
+    /// diffsol with the defaults of `anm reference diffsol` (atol = rtol,
+    /// algebraic atol [`crate::reference::diffsol::ATOL_ALGEBRAIC`]).
+    Diffsol {
+        method: DiffsolMethod,
+        rtol: f64,
+    },
 }
 
 impl Method {
@@ -30,21 +50,27 @@ impl Method {
         match self {
             Method::Anm { order, .. } => format!("ANM N={order}"),
             Method::Ida { .. } => "IDA".into(),
+            Method::Diffsol { method, .. } => format!("diffsol {}", method.name().to_uppercase()),
         }
     }
     pub fn setting(&self) -> String {
         match self {
             Method::Anm { eps, .. } => format!("eps={eps:.0e}"),
-            Method::Ida { rtol } => format!("rtol={rtol:.0e}"),
+            Method::Ida { rtol } | Method::Diffsol { rtol, .. } => format!("rtol={rtol:.0e}"),
         }
     }
-    /// The command-line form read by [`Method::from_str`]: "anm:15:1e-9" or
-    /// "ida:1e-10".
+    /// The command-line form read by [`Method::from_str`]: "anm:15:1e-9",
+    /// "ida:1e-10", "diffsol-bdf:1e-8" or "diffsol-esdirk:1e-8".
     pub fn spec(&self) -> String {
         match self {
             Method::Anm { order, eps } => format!("anm:{order}:{eps:e}"),
             Method::Ida { rtol } => format!("ida:{rtol:e}"),
+            Method::Diffsol { method, rtol } => format!("diffsol-{}:{rtol:e}", method.name()),
         }
+    }
+    /// A baseline (not the ANM).
+    pub fn is_baseline(&self) -> bool {
+        !matches!(self, Method::Anm { .. })
     }
 }
 
@@ -59,8 +85,12 @@ impl std::str::FromStr for Method {
                 eps: num(eps)?,
             }),
             ["ida", rtol] => Ok(Method::Ida { rtol: num(rtol)? }),
+            [name, rtol] if name.starts_with("diffsol-") => Ok(Method::Diffsol {
+                method: name["diffsol-".len()..].parse()?,
+                rtol: num(rtol)?,
+            }),
             _ => Err(format!(
-                "`{s}`: expected anm:ORDER:EPS (e.g. anm:15:1e-9) or ida:RTOL (e.g. ida:1e-10)"
+                "`{s}`: expected anm:ORDER:EPS (e.g. anm:15:1e-9), ida:RTOL (e.g. ida:1e-10), diffsol-bdf:RTOL or diffsol-esdirk:RTOL"
             )),
         }
     }
@@ -100,38 +130,63 @@ pub fn solve(scene: &FrictionScene, method: &Method) -> Result<Solution> {
             Ok(run(&s, None, false)?.into())
         }
         Method::Ida { rtol } => ida(scene, *rtol),
+        Method::Diffsol { method, rtol } => {
+            let settings =
+                DiffsolSettings::new(*method, *rtol).map_err(|e| study_error(scene, e))?;
+            let run = crate::reference::diffsol::solve(scene, &settings)
+                .map_err(|e| study_error(scene, e))?;
+            Ok(from_reference(run))
+        }
     }
 }
 
-/// IDA as a method of the benchmark: solved at rtol (atol = rtol, as in
-/// `anm reference ida`'s default pairing); its steps and linear-solver setups
-/// (its factorizations) map onto [`Stats`]. The study reads the reference
-/// solver, never the other way round (DESIGN §1).
-#[cfg(feature = "reference")]
-fn ida(scene: &FrictionScene, rtol: f64) -> Result<Solution> {
-    let run = crate::reference::solve(scene, rtol, rtol).map_err(|e| {
-        crate::Error::study(
-            "bench",
-            scene.file.display().to_string(),
-            format!("IDA: {e}"),
-        )
-    })?;
+fn study_error(scene: &FrictionScene, e: crate::reference::IdaError) -> crate::Error {
+    crate::Error::study("bench", scene.file.display().to_string(), e.to_string())
+}
+
+/// A reference solver's run as a [`Solution`]: its common counters mapped
+/// onto [`Stats`] (factorizations, linear solves, residual evaluations).
+/// The study reads the reference solvers, never the other way round
+/// (DESIGN §1).
+fn from_reference(run: crate::reference::IdaRun) -> Solution {
     let c = &run.counters;
     let stats = crate::series::Stats {
-        steps: c.steps.max(0) as usize,
-        factorizations: c.linear_setups.max(0) as usize,
-        solves: c.nonlinear_iters.max(0) as usize,
-        residual_evaluations: (c.residual_evals + c.ls_residual_evals).max(0) as usize,
+        steps: c.steps as usize,
+        factorizations: c.factorizations as usize,
+        solves: c.linear_solves as usize,
+        residual_evaluations: c.residual_evaluations as usize,
         ..Default::default()
     };
-    Ok(Solution {
+    Solution {
         columns: run.columns,
         rows: run.history,
         stats,
         wall_s: run.wall_s,
         stop: run.stop.reason,
         t_stop: run.stop.t,
-    })
+    }
+}
+
+/// IDA as a method of the benchmark, with the set-up of `anm reference ida`
+/// at rtol (atol = rtol, algebraic unknowns out of the error test).
+#[cfg(feature = "reference")]
+fn ida(scene: &FrictionScene, rtol: f64) -> Result<Solution> {
+    Ok(from_reference(reference_ida(scene, rtol)?))
+}
+
+#[cfg(feature = "reference")]
+fn reference_ida(scene: &FrictionScene, rtol: f64) -> Result<crate::reference::IdaRun> {
+    let settings = crate::reference::IdaSettings::new(rtol).map_err(|e| study_error(scene, e))?;
+    crate::reference::solve(scene, &settings).map_err(|e| study_error(scene, e))
+}
+
+#[cfg(not(feature = "reference"))]
+fn reference_ida(scene: &FrictionScene, _rtol: f64) -> Result<crate::reference::IdaRun> {
+    Err(crate::Error::study(
+        "bench",
+        scene.file.display().to_string(),
+        "IDA needs a build with `--features reference`",
+    ))
 }
 
 #[cfg(not(feature = "reference"))]
@@ -149,6 +204,7 @@ pub struct BenchRow {
     pub case: String,
     pub method: String,
     pub setting: String,
+    /// Error of the positions ([`error`]).
     pub error: f64,
     /// Median wall seconds over the repetitions.
     pub wall_s: f64,
@@ -182,10 +238,24 @@ impl BenchRow {
     }
 }
 
-/// max over rows (up to `t_max`) and columns of |y - y_ref| / max|y_ref|.
+/// max over rows (up to `t_max`) and the position columns (u; u_x, u_y) of
+/// |y - y_ref| / max|y_ref|: the error the work-precision tables and the
+/// error targets use (issue 16). The baselines keep the algebraic unknowns
+/// (velocities, forces) out of their error test by default, so they compute
+/// the positions to their tolerance and the velocities less accurately;
+/// [`error_all`] covers every column.
 pub fn error(sol: &Solution, reference: &Solution, t_max: f64) -> f64 {
+    error_in(sol, reference, t_max, |c| c.starts_with('u'))
+}
+
+/// As [`error`], over every column (positions, velocities, forces).
+pub fn error_all(sol: &Solution, reference: &Solution, t_max: f64) -> f64 {
+    error_in(sol, reference, t_max, |_| true)
+}
+
+fn error_in(sol: &Solution, reference: &Solution, t_max: f64, keep: impl Fn(&str) -> bool) -> f64 {
     let mut worst: f64 = 0.0;
-    for j in 1..sol.columns.len() {
+    for j in (1..sol.columns.len()).filter(|&j| keep(&sol.columns[j])) {
         let scale = reference
             .rows
             .iter()
@@ -295,7 +365,7 @@ pub fn markdown(rows: &[BenchRow], reference_name: &str) -> String {
     let mut s = format!(
         "Reference: {reference_name}. Wall times: median and minimum. The ANM's order-p solves are timed with its series terms.\n\n"
     );
-    s += "| case | method | setting | error | wall median (s) | wall min (s) | steps | factorizations | solves | per step: assembly / factorization / solves / series (µs) | stop |\n";
+    s += "| case | method | setting | error (positions) | wall median (s) | wall min (s) | steps | factorizations | solves | per step: assembly / factorization / solves / series (µs) | stop |\n";
     s += "|---|---|---|---|---|---|---|---|---|---|---|\n";
     for r in rows {
         s += &format!(
@@ -417,10 +487,12 @@ impl Drop for Scratch {
     }
 }
 
-/// The friction work-precision matrix of issue 5: ANM orders 5..30 x eps
-/// 1e-3..1e-10, IDA rtol 1e-3..1e-10 in half decades (with `--features
-/// reference`): IDA has one knob where the ANM has two, so it gets the finer
-/// grid, lest a decade step cost it the fastest setting at a target.
+/// The friction work-precision matrix of issues 5 and 16: ANM orders 5..30
+/// x eps 1e-3..1e-10; the baselines at rtol 1e-3..1e-11 in half decades
+/// (3e-4, 1e-4, …): IDA (with `--features reference`), diffsol BDF and
+/// diffsol ESDIRK34, each with the set-up of `anm reference` (atol = rtol).
+/// A baseline has one knob where the ANM has two, so it gets the finer grid,
+/// lest a decade step cost it the fastest setting at a target.
 pub fn friction_methods(with_ida: bool) -> Vec<Method> {
     let mut m = vec![];
     for order in [5, 10, 15, 20, 30] {
@@ -431,31 +503,103 @@ pub fn friction_methods(with_ida: bool) -> Vec<Method> {
             });
         }
     }
-    if with_ida {
-        for e in 3..=10 {
-            for mantissa in [3.0, 1.0] {
-                if e > 3 || mantissa == 1.0 {
-                    m.push(Method::Ida {
-                        rtol: mantissa * 10f64.powi(-e),
-                    });
-                }
+    let mut rtols = vec![];
+    for e in 3..=11 {
+        for mantissa in [3.0, 1.0] {
+            if e > 3 || mantissa == 1.0 {
+                rtols.push(mantissa * 10f64.powi(-e));
             }
         }
     }
+    if with_ida {
+        m.extend(rtols.iter().map(|&rtol| Method::Ida { rtol }));
+    }
+    for method in [DiffsolMethod::Bdf, DiffsolMethod::Esdirk] {
+        m.extend(rtols.iter().map(|&rtol| Method::Diffsol { method, rtol }));
+    }
     m
+}
+
+/// For each case, error target and method family (label), the fastest
+/// setting reaching the target (by minimum wall time), and the ANM's time
+/// over the fastest baseline's.
+pub fn fastest_markdown(rows: &[BenchRow], targets: &[f64]) -> String {
+    let mut cases: Vec<&str> = rows.iter().map(|r| r.case.as_str()).collect();
+    cases.dedup();
+    let mut families: Vec<&str> = rows.iter().map(|r| r.method.as_str()).collect();
+    families.sort();
+    families.dedup();
+    let mut s = String::from(
+        "| case | error target | method | fastest setting | error | steps | wall min (ms) |\n|---|---|---|---|---|---|---|\n",
+    );
+    let mut verdicts = String::from(
+        "\n| case | error target | fastest ANM (ms) | fastest baseline (ms) | ANM / best baseline |\n|---|---|---|---|---|\n",
+    );
+    for case in &cases {
+        for &target in targets {
+            let best = |family: &str| {
+                rows.iter()
+                    .filter(|r| r.case == *case && r.method == family)
+                    .filter(|r| r.error <= target && r.wall_min_s.is_finite())
+                    .min_by(|a, b| a.wall_min_s.total_cmp(&b.wall_min_s))
+            };
+            let (mut anm, mut base): (Option<&BenchRow>, Option<&BenchRow>) = (None, None);
+            for family in &families {
+                let Some(r) = best(family) else {
+                    if rows.iter().any(|r| r.case == *case && r.method == *family) {
+                        s += &format!(
+                            "| {case} | {target:.0e} | {family} | none reaches it | – | – | – |\n"
+                        );
+                    }
+                    continue;
+                };
+                s += &format!(
+                    "| {case} | {target:.0e} | {family} | {} | {:.2e} | {} | {:.3} |\n",
+                    r.setting,
+                    r.error,
+                    r.steps,
+                    1e3 * r.wall_min_s
+                );
+                let slot = if family.starts_with("ANM") {
+                    &mut anm
+                } else {
+                    &mut base
+                };
+                if slot.is_none_or(|b| r.wall_min_s < b.wall_min_s) {
+                    *slot = Some(r);
+                }
+            }
+            let show = |r: Option<&BenchRow>| {
+                r.map_or("none reaches it".to_string(), |r| {
+                    format!("{} {} ({:.3})", r.method, r.setting, 1e3 * r.wall_min_s)
+                })
+            };
+            let ratio = match (anm, base) {
+                (Some(a), Some(b)) => format!("{:.2}", a.wall_min_s / b.wall_min_s),
+                _ => "–".into(),
+            };
+            verdicts += &format!(
+                "| {case} | {target:.0e} | {} | {} | {ratio} |\n",
+                show(anm),
+                show(base)
+            );
+        }
+    }
+    s + &verdicts
 }
 
 /// The reference a friction case is measured against, with the comparison
 /// window and how far the tightest ANM run is from it.
 pub struct Reference {
     pub solution: Solution,
-    /// "IDA rtol=1e-12", or "ANM N=30 eps=1e-14" without the reference feature.
+    /// "IDA rtol=1e-12", or "diffsol BDF rtol=1e-12" without the reference
+    /// feature.
     pub name: String,
-    /// Errors are taken on t <= t_max: friction-roller stops 0.05 s before
-    /// the breakdown the ANM detects.
+    /// Errors are taken on t <= t_max: friction-roller up to 0.05 s before
+    /// the reference's |v_s| first reaches Vc.
     pub t_max: f64,
     /// Error of ANM(30, 1e-14) against the reference: the floor of what the
-    /// table can resolve.
+    /// table can resolve (infinite when that run stops before t_max).
     pub anm_floor: f64,
 }
 
@@ -463,11 +607,17 @@ impl Reference {
     /// The error target a case can resolve: `target`, or 1.2 x the floor when
     /// the two references disagree by more than target / 1.2.
     pub fn target(&self, target: f64) -> f64 {
-        target.max(1.2 * self.anm_floor)
+        if self.anm_floor.is_finite() {
+            target.max(1.2 * self.anm_floor)
+        } else {
+            target
+        }
     }
 }
 
-/// Solves the tightest reference of a friction scene.
+/// Solves the tightest reference of a friction scene: IDA at rtol 1e-12, or
+/// without the reference feature diffsol BDF at rtol 1e-12 (an independent
+/// solver either way, never the ANM).
 pub fn reference(scene: &FrictionScene, with_ida: bool) -> Result<Reference> {
     let tight_anm = Method::Anm {
         order: 30,
@@ -476,15 +626,28 @@ pub fn reference(scene: &FrictionScene, with_ida: bool) -> Result<Reference> {
     let method = if with_ida {
         Method::Ida { rtol: 1e-12 }
     } else {
-        tight_anm.clone()
+        Method::Diffsol {
+            method: DiffsolMethod::Bdf,
+            rtol: 1e-12,
+        }
     };
-    let solution = solve(scene, &method)?;
+    let run = match method {
+        Method::Ida { rtol } => reference_ida(scene, rtol)?,
+        _ => {
+            let settings = DiffsolSettings::new(DiffsolMethod::Bdf, 1e-12)
+                .map_err(|e| study_error(scene, e))?;
+            crate::reference::diffsol::solve(scene, &settings).map_err(|e| study_error(scene, e))?
+        }
+    };
+    // friction-roller: up to 0.05 s before the reference's |v_s| first
+    // reaches Vc (the quasi-static regime; the breakdown follows). Taken
+    // from the reference, not the ANM, whose stop may come anywhere.
+    let t_max = match (scene.kind, run.surge_window()) {
+        (crate::scene::Kind::FrictionRoller, Some((t1, _))) => t1 - 0.05,
+        _ => scene.t_end,
+    };
+    let solution = from_reference(run);
     let anm = solve(scene, &tight_anm)?;
-    let t_max = if anm.stop == "singularity" {
-        anm.t_stop - 0.05
-    } else {
-        scene.t_end
-    };
     let anm_floor = error(&anm, &solution, t_max);
     Ok(Reference {
         solution,

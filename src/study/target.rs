@@ -1,7 +1,8 @@
-//! Head-to-head at an error target: the fastest ANM and the fastest IDA
-//! setting that reach it, timed again with interleaved repetitions and
-//! counted in instructions (issue criterion: "error 1e-8, ANM time <= IDA
-//! time").
+//! Head-to-head at an error target: the fastest ANM setting and the fastest
+//! baseline setting (IDA, diffsol BDF or diffsol ESDIRK, whichever is
+//! fastest) that reach it, timed again with interleaved repetitions and
+//! counted in instructions (issue criteria: "error 1e-8, ANM time <= IDA
+//! time"; issue 16: the ANM against the best baseline).
 //!
 //! The work-precision pass ([`super::bench::work_precision`]) shortlists the
 //! settings whose error meets the target by their fastest repetition; the
@@ -17,9 +18,9 @@ use crate::error::Result;
 use crate::scene::friction::FrictionScene;
 use std::path::Path;
 
-/// ANM settings and IDA settings kept for the head-to-head.
+/// ANM settings and baseline settings kept for the head-to-head.
 const SHORTLIST_ANM: usize = 3;
-const SHORTLIST_IDA: usize = 2;
+const SHORTLIST_BASELINE: usize = 3;
 
 /// One shortlisted setting, timed.
 #[derive(Clone, Debug)]
@@ -37,10 +38,10 @@ pub struct Contender {
 pub struct HeadToHead {
     pub case: String,
     pub target: f64,
-    /// Every shortlisted setting; the first ANM and the first IDA ones are
-    /// the fastest (by minimum wall time).
+    /// Every shortlisted setting; [`HeadToHead::anm`] and
+    /// [`HeadToHead::baseline`] pick the fastest (by minimum wall time).
     pub contenders: Vec<Contender>,
-    /// ANM / IDA wall time, round by round, for the two fastest.
+    /// ANM / best-baseline wall time, round by round, for the two fastest.
     pub ratio: Spread,
 }
 
@@ -48,19 +49,21 @@ impl HeadToHead {
     fn fastest(&self, anm: bool) -> Option<&Contender> {
         self.contenders
             .iter()
-            .filter(|c| matches!(c.method, Method::Anm { .. }) == anm)
+            .filter(|c| c.method.is_baseline() != anm)
             .min_by(|a, b| a.spread.min().total_cmp(&b.spread.min()))
     }
     pub fn anm(&self) -> Option<&Contender> {
         self.fastest(true)
     }
-    pub fn ida(&self) -> Option<&Contender> {
+    /// The fastest baseline (IDA or diffsol).
+    pub fn baseline(&self) -> Option<&Contender> {
         self.fastest(false)
     }
 }
 
 /// The settings of `rows` (one case) that reach `target`, fastest first by
-/// minimum wall time: up to `SHORTLIST_ANM` ANM and `SHORTLIST_IDA` IDA ones.
+/// minimum wall time: up to `SHORTLIST_ANM` ANM and `SHORTLIST_BASELINE`
+/// baseline ones.
 fn shortlist(rows: &[BenchRow], methods: &[Method], target: f64) -> Vec<(Method, f64, usize)> {
     let mut ok: Vec<(&BenchRow, &Method)> = rows
         .iter()
@@ -75,12 +78,12 @@ fn shortlist(rows: &[BenchRow], methods: &[Method], target: f64) -> Vec<(Method,
     ok.sort_by(|a, b| a.0.wall_min_s.total_cmp(&b.0.wall_min_s));
     let pick = |anm: bool, n: usize| {
         ok.iter()
-            .filter(move |(_, m)| matches!(m, Method::Anm { .. }) == anm)
+            .filter(move |(_, m)| m.is_baseline() != anm)
             .take(n)
             .map(|(r, m)| ((*m).clone(), r.error, r.steps))
     };
     pick(true, SHORTLIST_ANM)
-        .chain(pick(false, SHORTLIST_IDA))
+        .chain(pick(false, SHORTLIST_BASELINE))
         .collect()
 }
 
@@ -116,7 +119,7 @@ pub fn head_to_head(
         contenders,
         ratio: Spread::default(),
     };
-    if let (Some(a), Some(i)) = (h.anm(), h.ida()) {
+    if let (Some(a), Some(i)) = (h.anm(), h.baseline()) {
         h.ratio.samples = a
             .spread
             .samples
@@ -158,16 +161,16 @@ pub fn markdown(list: &[HeadToHead]) -> String {
             );
         }
     }
-    s += "\n| case | target | fastest ANM | fastest IDA | ANM / IDA: min | per-round median (p10–p90) | instructions |\n|---|---|---|---|---|---|---|\n";
+    s += "\n| case | target | fastest ANM | fastest baseline | ANM / baseline: min | per-round median (p10–p90) | instructions |\n|---|---|---|---|---|---|---|\n";
     for h in list {
-        let (Some(a), Some(i)) = (h.anm(), h.ida()) else {
+        let (Some(a), Some(i)) = (h.anm(), h.baseline()) else {
             s += &format!(
                 "| {} | {:.0e} | {} | {} | – | – | – |\n",
                 h.case,
                 h.target,
                 h.anm()
                     .map_or("none reaches it".into(), |a| a.method.spec()),
-                h.ida()
+                h.baseline()
                     .map_or("none reaches it".into(), |i| i.method.spec()),
             );
             continue;

@@ -4,6 +4,8 @@
 #[path = "../common/mod.rs"]
 mod common;
 
+mod diffsol_reference;
 mod friction_1d_closed_form;
 mod plane_closed_form;
+mod reference_cli;
 mod roller_breakdown;

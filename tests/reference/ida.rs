@@ -14,16 +14,31 @@
 //!     column <= 1e-6 (friction-roller: up to 0.05 s before the ANM's stop).
 //! (c) friction-roller: the ANM's stop time lies within the window where
 //!     IDA's |slip speed| rises from Vc to 10 Vc.
+//! (d) Issue 16 (IDA at its best; diffsol as a second solver), on the grid
+//!     zeta in {1e-1, 1e-2, 1e-4, 1e-6} N x omega in {1e-1, 1e-4, 1e-6} of
+//!     friction-plane and friction-roller (friction-1d: omega only, its R_N
+//!     is given): IDA with the set-up of `anm reference ida` and diffsol BDF
+//!     both reach t_end at rtol = atol = 1e-8 in at most 1,500 steps; IDA
+//!     and diffsol BDF agree to 1e-7 on the displacements at rtol 1e-10
+//!     (roller: up to 0.05 s before IDA's |v_s| reaches Vc); the roller's
+//!     surge window of IDA still brackets the ANM's stop at every cell's
+//!     default. The errors at rtol 1e-8 against IDA at rtol 1e-12 are printed
+//!     (README "Fair baselines").
 #![cfg(feature = "reference")]
 
 use anm::model::friction_run::{FrictionRun, run as anm_run};
-use anm::reference::run::solve_model;
-use anm::reference::{IdaRun, solve};
+use anm::reference::diffsol::DiffsolSettings;
+use anm::reference::ida_run::solve_model;
+use anm::reference::settings::DiffsolMethod;
+use anm::reference::{IdaRun, IdaSettings, solve};
 use anm::scene::{self, friction::FrictionScene};
 use std::path::Path;
 
 const RTOL: f64 = 1e-10;
-const ATOL: f64 = 1e-10;
+
+fn settings(rtol: f64) -> IdaSettings {
+    IdaSettings::new(rtol).expect("valid tolerances")
+}
 
 fn load(name: &str) -> FrictionScene {
     let path = Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -35,7 +50,7 @@ fn load(name: &str) -> FrictionScene {
 }
 
 fn ida(scene: &FrictionScene) -> IdaRun {
-    let run = solve(scene, RTOL, ATOL).unwrap_or_else(|e| panic!("IDA failed: {e}"));
+    let run = solve(scene, &settings(RTOL)).unwrap_or_else(|e| panic!("IDA failed: {e}"));
     for row in &run.history {
         assert!(
             row.iter().all(|v| v.is_finite()),
@@ -49,9 +64,9 @@ fn ida(scene: &FrictionScene) -> IdaRun {
         run.stop.reason,
         run.stop.t,
         run.counters.steps,
-        run.counters.residual_evals,
-        run.counters.jacobian_evals,
-        run.counters.linear_setups,
+        run.counters.residual_evaluations,
+        run.counters.jacobian_evaluations,
+        run.counters.factorizations,
         run.wall_s,
         run.max_constraint_drift
     );
@@ -76,7 +91,13 @@ fn col(run_cols: &[String], name: &str) -> usize {
 /// tolerances it steps over the contact and its Newton iteration lands on the
 /// quadratic contact law's other root (R_N ~ -1e-8, the mass passing through
 /// the plane, u_y -> -3). rtol 1e-6 / atol 1e-8 resolves both (about 2.5e5
-/// steps); the branch is checked below.
+/// steps with the friction law as written); the branch is checked below.
+///
+/// Here the algebraic unknowns stay in the error test (atol 1e-8, IDASVtolerances),
+/// unlike the default set-up: with them suppressed only u_x is tested, and
+/// nothing in the test sees the 1e-8 s wide contact transition (u_y and R_N
+/// are algebraic on the plane), so IDA steps over it in 63 steps and lands on
+/// the other root (R_N = 1.3e-8 N, u_y = -1.2 m at t = 1.2 s).
 #[test]
 fn ida_plane_coulomb_closed_form() {
     let mut sc = load("friction-plane");
@@ -86,14 +107,17 @@ fn ida_plane_coulomb_closed_form() {
     let c = sc.contact.as_mut().expect("contact");
     c.eta = 1e-8;
     c.k = 1e8;
-    let run = solve(&sc, 1e-6, 1e-8).unwrap_or_else(|e| panic!("IDA failed: {e}"));
+    let mut set = settings(1e-6);
+    set.tol.atol = 1e-8;
+    set.algebraic = anm::reference::settings::AlgebraicControl::Atol(1e-8);
+    let run = solve(&sc, &set).unwrap_or_else(|e| panic!("IDA failed: {e}"));
     println!(
         "IDA on plane q=0: stop {} at t = {:.9}; {} steps, {} res, {} jac, {:.3} s",
         run.stop.reason,
         run.stop.t,
         run.counters.steps,
-        run.counters.residual_evals,
-        run.counters.jacobian_evals,
+        run.counters.residual_evaluations,
+        run.counters.jacobian_evaluations,
         run.wall_s
     );
     assert_eq!(run.stop.reason, "end", "{:?}", run.stop);
@@ -169,7 +193,7 @@ fn ida_roller_plane_limit() {
         sc.t_end = plane.t_end;
         sc.dt = plane.dt;
         let model = anm::reference::run::model(&sc).expect("model");
-        let roller = solve_model(&sc, model.as_ref(), RTOL, ATOL).expect("IDA roller");
+        let roller = solve_model(&sc, model.as_ref(), &settings(RTOL)).expect("IDA roller");
         println!(
             "roller r = {r:e}: stop {} at t = {}, {} steps, max constraint drift {:.2e}",
             roller.stop.reason, roller.stop.t, roller.counters.steps, roller.max_constraint_drift
@@ -327,4 +351,143 @@ fn roller_breakdown_window() {
         t1 <= t_stop && t_stop <= t10,
         "ANM stop {t_stop} outside IDA's window [{t1}, {t10}]"
     );
+}
+
+/// The cells of issue 16: (scene, zeta, omega); friction-1d has no zeta.
+fn grid() -> Vec<(&'static str, Option<f64>, f64)> {
+    let mut cells = vec![];
+    for omega in [1e-1, 1e-4, 1e-6] {
+        cells.push(("friction-1d", None, omega));
+    }
+    for name in ["friction-plane", "friction-roller"] {
+        for zeta in [1e-1, 1e-2, 1e-4, 1e-6] {
+            for omega in [1e-1, 1e-4, 1e-6] {
+                cells.push((name, Some(zeta), omega));
+            }
+        }
+    }
+    cells
+}
+
+fn cell(name: &str, zeta: Option<f64>, omega: f64) -> FrictionScene {
+    let mut sc = load(name);
+    sc.friction.omega = omega;
+    if zeta.is_some() {
+        sc.friction.zeta = zeta;
+    }
+    sc
+}
+
+/// The displacement columns compared in the grid.
+fn positions(name: &str) -> &'static [&'static str] {
+    match name {
+        "friction-1d" => &["u"],
+        "friction-plane" => &["ux"],
+        _ => &["ux", "uy"],
+    }
+}
+
+/// Max relative error of the named columns of `a` against `b` on t <= t_max
+/// (infinite when `a` stopped before t_max).
+fn position_error(name: &str, a: &IdaRun, b: &IdaRun, t_max: f64) -> f64 {
+    let want = b.history.iter().filter(|r| r[0] <= t_max).count();
+    if a.history.iter().filter(|r| r[0] <= t_max).count() < want {
+        return f64::INFINITY;
+    }
+    column_errors(&a.columns, &a.history, &b.history, t_max)
+        .into_iter()
+        .filter(|(c, _)| positions(name).contains(&c.as_str()))
+        .map(|(_, e)| e)
+        .fold(0.0, f64::max)
+}
+
+/// The comparison window: the whole run, or for the roller up to 0.05 s
+/// before the reference's |v_s| first reaches Vc (the quasi-static regime;
+/// the ANM stops in the surge that follows).
+fn window(name: &str, reference: &IdaRun) -> f64 {
+    match (name, reference.surge_window()) {
+        ("friction-roller", Some((t1, _))) => t1 - 0.05,
+        _ => f64::INFINITY,
+    }
+}
+
+/// (d) Every cell: IDA and diffsol BDF end within 1,500 steps at rtol 1e-8;
+/// they agree to 1e-7 at rtol 1e-10. The errors at rtol 1e-8 against IDA at
+/// rtol 1e-12 are printed, not asserted (README: where 1e-7 is reached).
+#[test]
+fn baselines_on_the_regularization_grid() {
+    println!(
+        "| scene | zeta | omega | IDA steps | IDA etf | IDA err | diffsol BDF steps | BDF err | IDA vs BDF (1e-8) | IDA vs BDF (1e-10) |"
+    );
+    let mut failures = vec![];
+    for (name, zeta, omega) in grid() {
+        let sc = cell(name, zeta, omega);
+        let ida8 = solve(&sc, &settings(1e-8)).expect("IDA");
+        let ida10 = solve(&sc, &settings(1e-10)).expect("IDA");
+        let ida12 = solve(&sc, &settings(1e-12)).expect("IDA");
+        let bdf = |rtol| {
+            let s = DiffsolSettings::new(DiffsolMethod::Bdf, rtol).expect("settings");
+            anm::reference::diffsol::solve(&sc, &s).expect("diffsol")
+        };
+        let (bdf8, bdf10) = (bdf(1e-8), bdf(1e-10));
+        let t_max = window(name, &ida12);
+        let e = |a: &IdaRun, b: &IdaRun| position_error(name, a, b, t_max);
+        let agree10 = e(&bdf10, &ida10);
+        println!(
+            "| {name} | {} | {omega:e} | {} | {} | {:.1e} | {} | {:.1e} | {:.1e} | {:.1e} |",
+            zeta.map_or("–".into(), |z| format!("{z:e}")),
+            ida8.counters.steps,
+            ida8.counters.error_test_failures,
+            e(&ida8, &ida12),
+            bdf8.counters.steps,
+            e(&bdf8, &ida12),
+            e(&bdf8, &ida8),
+            agree10,
+        );
+        for (who, run) in [("IDA", &ida8), ("diffsol BDF", &bdf8)] {
+            if run.stop.reason != "end" || run.counters.steps > 1500 {
+                failures.push(format!(
+                    "{name} zeta {zeta:?} omega {omega:e}: {who} {} after {} steps",
+                    run.stop.reason, run.counters.steps
+                ));
+            }
+        }
+        if agree10.is_nan() || agree10 > 1e-7 {
+            failures.push(format!(
+                "{name} zeta {zeta:?} omega {omega:e}: IDA and diffsol (rtol 1e-10) differ by {agree10:e}"
+            ));
+        }
+    }
+    assert!(failures.is_empty(), "{failures:#?}");
+}
+
+/// (d) The tuned set-up against IDA's library defaults on the paper's
+/// equations (every unknown in the error test with atol = rtol, the friction
+/// law as written), friction-plane at zeta = 1e-2 N, rtol 1e-8: the default
+/// set-up pins IDA at order 1 (issue 16: 44,437 steps, 43,753 error-test
+/// failures); the velocity v_y dominates the local error estimate.
+#[test]
+fn library_defaults_stall_and_the_tuned_setup_does_not() {
+    let sc = cell("friction-plane", Some(1e-2), 1e-1);
+    let plain = solve(&sc, &IdaSettings::library_default(1e-8, 1e-8).unwrap()).expect("IDA");
+    let tuned = solve(&sc, &settings(1e-8)).expect("IDA");
+    let dominant = |r: &IdaRun| {
+        r.unknowns
+            .iter()
+            .zip(&r.dominant_error)
+            .max_by_key(|(_, n)| **n)
+            .map(|(u, n)| format!("{u} ({n} steps)"))
+    };
+    for (what, r) in [("library defaults", &plain), ("tuned", &tuned)] {
+        println!(
+            "{what}: {} steps, {} at order 1, {} error-test failures; largest local error: {:?}",
+            r.counters.steps,
+            r.order_one_steps(),
+            r.counters.error_test_failures,
+            dominant(r)
+        );
+    }
+    assert!(plain.counters.steps > 10 * tuned.counters.steps);
+    assert!(plain.order_one_steps() * 2 > plain.counters.steps as usize);
+    assert!(tuned.counters.steps <= 1500);
 }

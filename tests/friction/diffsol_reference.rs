@@ -1,0 +1,229 @@
+//! Source: diffsol 0.18 (pure Rust, written by others: variable-order BDF and
+//! ESDIRK34 with a singular mass matrix), solving the paper's regularized
+//! friction DAEs (Béchet et al., CFM 2009, §3.2–3.4; DESIGN §5) as written
+//! independently in `anm::reference` (plain f64, analytic Jacobians, global
+//! Cartesian coordinates). It needs no C library, so these checks run in the
+//! default `cargo test`; with `--features reference`, tests/reference/ida.rs
+//! compares diffsol with SUNDIALS IDA as well.
+//!
+//! Goals:
+//! (a) diffsol against a closed form we did not write: the friction-1d
+//!     plateau u = f R_N / k (1 + omega^2)^((q-1)/2), 1e-8 relative.
+//! (b) The ANM against diffsol BDF at rtol 1e-10 on the three scenes:
+//!     max |y_anm - y_ref| / max |y_ref| per column <= 1e-6 (friction-roller
+//!     up to 0.05 s before the ANM's stop), the tolerance of the IDA test.
+//! (c) diffsol's BDF and ESDIRK34 agree with each other at rtol 1e-10 to 1e-7
+//!     on the displacements (two methods of the library, one DAE).
+//! (d) friction-roller: the ANM's stop lies in diffsol's window
+//!     [t(|v_s| = Vc), t(|v_s| = 10 Vc)].
+//! (e) Issue 16's step budget at small regularizations: friction-plane at
+//!     zeta = 1e-4 N and omega = 1e-6: diffsol BDF at rtol = atol = 1e-8 ends
+//!     in at most 1,500 steps, within 1e-7 (u_x) of itself at rtol 1e-11.
+
+use crate::common::friction_scene;
+use anm::model::friction_run::run as anm_run;
+use anm::reference::IdaRun;
+use anm::reference::diffsol::{DiffsolSettings, solve};
+use anm::reference::settings::DiffsolMethod;
+use anm::scene::friction::FrictionScene;
+
+fn diffsol(scene: &FrictionScene, method: DiffsolMethod, rtol: f64) -> IdaRun {
+    let settings = DiffsolSettings::new(method, rtol).expect("valid settings");
+    let run = solve(scene, &settings).unwrap_or_else(|e| panic!("diffsol failed: {e}"));
+    let c = &run.counters;
+    println!(
+        "diffsol {} on {} (rtol {rtol:e}): stop {} at t = {:.9} s; {} steps, {} error-test and {} convergence failures, {} residuals, {} Jacobians, {} factorizations",
+        run.method,
+        run.kind,
+        run.stop.reason,
+        run.stop.t,
+        c.steps,
+        c.error_test_failures,
+        c.convergence_failures,
+        c.residual_evaluations,
+        c.jacobian_evaluations,
+        c.factorizations
+    );
+    for row in &run.history {
+        assert!(row.iter().all(|v| v.is_finite()), "non-finite row {row:?}");
+    }
+    run
+}
+
+/// Per column j >= 1 (or only those named): max_i |a_ij - b_ij| / max_i
+/// |b_ij| over the rows with t <= t_max, rows matched by time.
+pub fn column_errors(
+    cols: &[String],
+    a: &[Vec<f64>],
+    b: &[Vec<f64>],
+    t_max: f64,
+    only: &[&str],
+) -> Vec<(String, f64)> {
+    let rows: Vec<(&Vec<f64>, &Vec<f64>)> =
+        a.iter().zip(b).filter(|(ra, _)| ra[0] <= t_max).collect();
+    assert!(!rows.is_empty(), "no rows to compare");
+    let expected = b.iter().filter(|r| r[0] <= t_max).count();
+    assert_eq!(rows.len(), expected, "a run stopped early");
+    for (ra, rb) in &rows {
+        assert!(
+            (ra[0] - rb[0]).abs() <= 1e-9,
+            "grids differ: {} vs {}",
+            ra[0],
+            rb[0]
+        );
+    }
+    (1..cols.len())
+        .filter(|&j| only.is_empty() || only.contains(&cols[j].as_str()))
+        .map(|j| {
+            let scale = rows.iter().map(|(_, rb)| rb[j].abs()).fold(0.0, f64::max);
+            let diff = rows
+                .iter()
+                .map(|(ra, rb)| (ra[j] - rb[j]).abs())
+                .fold(0.0, f64::max);
+            (
+                cols[j].clone(),
+                if scale > 0.0 { diff / scale } else { diff },
+            )
+        })
+        .collect()
+}
+
+fn print_table(title: &str, errs: &[(String, f64)]) {
+    println!("{title}");
+    for (name, e) in errs {
+        println!("  {name:<8} {e:>12.3e}");
+    }
+}
+
+/// (a) The friction-1d plateau.
+#[test]
+fn diffsol_1d_plateau() {
+    let sc = friction_scene("friction-1d.toml", &[]);
+    let fr = &sc.friction;
+    assert_eq!((sc.k, fr.f, sc.normal_force, fr.vc), (1.0, 0.2, 1.0, 1.0));
+    let plateau = 0.2 * (1.0 + fr.omega * fr.omega).powf((fr.q - 1.0) / 2.0);
+    for method in [DiffsolMethod::Bdf, DiffsolMethod::Esdirk] {
+        let run = diffsol(&sc, method, 1e-10);
+        assert_eq!(run.stop.reason, "end", "{:?}", run.stop);
+        let last = run.history.last().expect("rows");
+        let rel = (last[1] - plateau).abs() / plateau;
+        println!(
+            "{}: u({}) = {:.15e}, closed form {plateau:.15e}, relative {rel:.3e}",
+            method.name(),
+            last[0],
+            last[1]
+        );
+        assert!(rel <= 1e-8, "plateau off by {rel:e}");
+    }
+}
+
+fn anm_vs_diffsol(name: &str, before_stop: f64) {
+    let sc = friction_scene(&format!("{name}.toml"), &[]);
+    let a = anm_run(&sc, None, false).unwrap_or_else(|e| panic!("ANM failed: {e}"));
+    let b = diffsol(&sc, DiffsolMethod::Bdf, 1e-10);
+    assert_eq!(a.columns, b.columns);
+    let t_max = match a.stop.reason.as_str() {
+        "end" => f64::INFINITY,
+        _ => a.stop.t.expect("stop time") - before_stop,
+    };
+    let errs = column_errors(&a.columns, &a.history, &b.history, t_max, &[]);
+    print_table(
+        &format!("{name}: ANM vs diffsol BDF (rtol 1e-10), t <= {t_max}"),
+        &errs,
+    );
+    let bad: Vec<_> = errs
+        .iter()
+        .filter(|(_, e)| e.is_nan() || *e > 1e-6)
+        .collect();
+    assert!(bad.is_empty(), "{name}: columns above 1e-6: {bad:?}");
+}
+
+/// (b) friction-1d: ANM vs diffsol.
+#[test]
+fn anm_vs_diffsol_friction_1d() {
+    anm_vs_diffsol("friction-1d", 0.0);
+}
+
+/// (b) friction-plane: ANM vs diffsol.
+#[test]
+fn anm_vs_diffsol_friction_plane() {
+    anm_vs_diffsol("friction-plane", 0.0);
+}
+
+/// (b) friction-roller: ANM vs diffsol up to 0.05 s before the ANM's stop.
+#[test]
+fn anm_vs_diffsol_friction_roller() {
+    anm_vs_diffsol("friction-roller", 0.05);
+}
+
+/// (c) BDF against ESDIRK34 on the displacements, rtol 1e-10 (roller: up to
+/// 0.05 s before BDF's |v_s| reaches Vc).
+#[test]
+fn bdf_and_esdirk_agree() {
+    for (name, cols) in [
+        ("friction-1d", &["u"][..]),
+        ("friction-plane", &["ux"][..]),
+        ("friction-roller", &["ux", "uy"][..]),
+    ] {
+        let sc = friction_scene(&format!("{name}.toml"), &[]);
+        let bdf = diffsol(&sc, DiffsolMethod::Bdf, 1e-10);
+        let esdirk = diffsol(&sc, DiffsolMethod::Esdirk, 1e-10);
+        assert_eq!(bdf.stop.reason, "end", "{:?}", bdf.stop);
+        assert_eq!(esdirk.stop.reason, "end", "{:?}", esdirk.stop);
+        let t_max = bdf
+            .surge_window()
+            .map_or(f64::INFINITY, |(t1, _)| t1 - 0.05);
+        let errs = column_errors(&bdf.columns, &esdirk.history, &bdf.history, t_max, cols);
+        print_table(&format!("{name}: ESDIRK34 vs BDF, t <= {t_max}"), &errs);
+        for (c, e) in errs {
+            assert!(e <= 1e-7, "{name}: {c} differs by {e:e}");
+        }
+    }
+}
+
+/// (d) The ANM's stop inside diffsol's surge window.
+#[test]
+fn roller_stop_in_diffsol_window() {
+    let sc = friction_scene("friction-roller.toml", &[]);
+    let a = anm_run(&sc, None, false).unwrap_or_else(|e| panic!("ANM failed: {e}"));
+    let b = diffsol(&sc, DiffsolMethod::Bdf, 1e-10);
+    let t_stop = a.stop.t.expect("ANM stop time");
+    let (t1, t10) = b.surge_window().expect("diffsol's |slip| reaches 10 Vc");
+    println!(
+        "ANM stop {} at {t_stop:.9}; diffsol window [{t1:.9}, {t10:.9}]",
+        a.stop.reason
+    );
+    assert_eq!(a.stop.reason, "singularity", "{:?}", a.stop);
+    assert!(
+        t1 <= t_stop && t_stop <= t10,
+        "ANM stop {t_stop} outside diffsol's window [{t1}, {t10}]"
+    );
+}
+
+/// (e) Small regularizations: the step budget of issue 16 and
+/// self-convergence.
+#[test]
+fn small_zeta_within_step_budget() {
+    let sc = friction_scene(
+        "friction-plane.toml",
+        &[("friction.zeta", "1e-4"), ("friction.omega", "1e-6")],
+    );
+    let run = diffsol(&sc, DiffsolMethod::Bdf, 1e-8);
+    let tight = diffsol(&sc, DiffsolMethod::Bdf, 1e-11);
+    assert_eq!(run.stop.reason, "end", "{:?}", run.stop);
+    assert_eq!(tight.stop.reason, "end", "{:?}", tight.stop);
+    let errs = column_errors(
+        &run.columns,
+        &run.history,
+        &tight.history,
+        f64::INFINITY,
+        &["ux"],
+    );
+    print_table("plane zeta 1e-4, omega 1e-6: rtol 1e-8 vs 1e-11", &errs);
+    assert!(
+        run.counters.steps <= 1500,
+        "{} steps at rtol 1e-8",
+        run.counters.steps
+    );
+    assert!(errs[0].1 <= 1e-7, "u_x off by {:e}", errs[0].1);
+}
