@@ -397,6 +397,24 @@ fn mpi_rank_child() {
     }
 }
 
+/// `mpirun` for a new job. This test process is itself an MPI singleton
+/// (the other tests use MUMPS): its MPI runtime variables must not leak into
+/// the new job.
+fn mpirun_job(mpirun: &std::path::Path) -> Command {
+    let mut cmd = Command::new(mpirun);
+    for (k, _) in std::env::vars_os() {
+        let k = k.to_string_lossy();
+        if ["OMPI_", "PMIX_", "ORTE_", "OPAL_"]
+            .iter()
+            .any(|p| k.starts_with(p))
+            && !k.starts_with("OMPI_ALLOW_RUN_AS_ROOT")
+        {
+            cmd.env_remove(&*k);
+        }
+    }
+    cmd
+}
+
 fn find_in_path(name: &str) -> Option<std::path::PathBuf> {
     std::env::var_os("PATH").and_then(|p| {
         std::env::split_paths(&p)
@@ -419,20 +437,8 @@ fn two_ranks_hold_the_same_solution() {
     let exe = std::env::current_exe().unwrap();
     let dir = std::env::temp_dir().join(format!("anm-mumps-ranks-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    let mut cmd = Command::new(mpirun);
+    let mut cmd = mpirun_job(&mpirun);
     cmd.env("ANM_MUMPS_RANK_DIR", &dir);
-    // This test process is itself an MPI singleton (the other tests use
-    // MUMPS): its MPI runtime variables must not leak into the new job.
-    for (k, _) in std::env::vars_os() {
-        let k = k.to_string_lossy();
-        if ["OMPI_", "PMIX_", "ORTE_", "OPAL_"]
-            .iter()
-            .any(|p| k.starts_with(p))
-            && !k.starts_with("OMPI_ALLOW_RUN_AS_ROOT")
-        {
-            cmd.env_remove(&*k);
-        }
-    }
     let mut child = cmd
         .args(["--allow-run-as-root", "--oversubscribe", "-n", "2"])
         .arg(&exe)
@@ -681,17 +687,7 @@ fn anm_run_on_two_ranks_matches_faer() {
         .unwrap();
     assert!(s.success());
     let mumps_out = dir.join("mumps");
-    let mut cmd = Command::new(mpirun);
-    for (k, _) in std::env::vars_os() {
-        let k = k.to_string_lossy();
-        if ["OMPI_", "PMIX_", "ORTE_", "OPAL_"]
-            .iter()
-            .any(|p| k.starts_with(p))
-            && !k.starts_with("OMPI_ALLOW_RUN_AS_ROOT")
-        {
-            cmd.env_remove(&*k);
-        }
-    }
+    let mut cmd = mpirun_job(&mpirun);
     let o = cmd
         .args(["--allow-run-as-root", "--oversubscribe", "-n", "2", exe])
         .args(["run", "--quiet", "-o"])

@@ -382,11 +382,7 @@ impl Sweep for FrictionAudit {
         sweep::encode(&run_item(name, *v, s))
     }
     fn merge(&self, items: &[serde_json::Value], dir: Option<&Path>) -> Result<Merged> {
-        let items: Vec<AuditItem> = items
-            .iter()
-            .enumerate()
-            .map(|(k, v)| sweep::decode(k, v))
-            .collect::<Result<_>>()?;
+        let items: Vec<AuditItem> = sweep::decode_all(items)?;
         let rows = rows(&self.scene, &items)?;
         if let Some(dir) = dir {
             write(&self.scene, &rows, dir)?;

@@ -300,11 +300,7 @@ impl Sweep for ScalingSweep {
         sweep::encode(&size)
     }
     fn merge(&self, items: &[serde_json::Value], dir: Option<&Path>) -> Result<Merged> {
-        let sizes = items
-            .iter()
-            .enumerate()
-            .map(|(k, v)| sweep::decode::<SizeRun>(k, v))
-            .collect::<Result<Vec<_>>>()?;
+        let sizes: Vec<SizeRun> = sweep::decode_all(items)?;
         let rows = sizes.iter().map(row).collect::<Result<Vec<_>>>()?;
         let mut md = markdown(&rows);
         if let Some(dir) = dir {

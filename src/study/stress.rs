@@ -196,6 +196,22 @@ pub fn run_job(job: &StressJob) -> StressCase {
     }
 }
 
+/// A run that stopped with an error: diagnosed, with the error's kind.
+fn diagnosed(scene: String, axis: &str, value: f64, e: &crate::error::Error) -> StressCase {
+    StressCase {
+        scene,
+        axis: axis.to_string(),
+        value,
+        verdict: Verdict::Diagnosed,
+        stop: e.kind().into(),
+        message: e.to_string(),
+        residual: 0.0,
+        steps: 0,
+        wall_s: 0.0,
+        detail: String::new(),
+    }
+}
+
 fn friction_case(
     scene: String,
     axis: &'static str,
@@ -204,18 +220,7 @@ fn friction_case(
     r: Result<crate::model::friction_run::FrictionRun>,
 ) -> StressCase {
     match r {
-        Err(e) => StressCase {
-            scene,
-            axis: axis.to_string(),
-            value,
-            verdict: Verdict::Diagnosed,
-            stop: e.kind().into(),
-            message: e.to_string(),
-            residual: 0.0,
-            steps: 0,
-            wall_s: 0.0,
-            detail: String::new(),
-        },
+        Err(e) => diagnosed(scene, axis, value, &e),
         Ok(run) => {
             let residual = max_relative_residual(s, &run.columns, &run.history);
             let finite = run.history.iter().flatten().all(|x| x.is_finite());
@@ -331,18 +336,7 @@ fn shell_case(
     r: Result<(crate::run::RunReport, super::shell_check::ShellCheck)>,
 ) -> StressCase {
     match r {
-        Err(e) => StressCase {
-            scene,
-            axis: axis.to_string(),
-            value,
-            verdict: Verdict::Diagnosed,
-            stop: e.kind().into(),
-            message: e.to_string(),
-            residual: 0.0,
-            steps: 0,
-            wall_s: 0.0,
-            detail: String::new(),
-        },
+        Err(e) => diagnosed(scene, axis, value, &e),
         Ok((run, c)) => {
             let finite = run.history.iter().flatten().all(|x| x.is_finite());
             let normal = run.stop.reason == "end";
@@ -542,11 +536,7 @@ impl Sweep for StressSweep {
         sweep::encode(&run_job(&self.jobs[k]))
     }
     fn merge(&self, items: &[serde_json::Value], dir: Option<&Path>) -> Result<Merged> {
-        let cases: Vec<StressCase> = items
-            .iter()
-            .enumerate()
-            .map(|(k, v)| sweep::decode(k, v))
-            .collect::<Result<_>>()?;
+        let cases: Vec<StressCase> = sweep::decode_all(items)?;
         if let Some(dir) = dir {
             write(&cases, dir)?;
         }

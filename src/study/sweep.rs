@@ -581,6 +581,15 @@ pub fn decode<T: serde::de::DeserializeOwned>(k: usize, v: &serde_json::Value) -
     })
 }
 
+/// Decodes every item result, in item order.
+pub fn decode_all<T: serde::de::DeserializeOwned>(items: &[serde_json::Value]) -> Result<Vec<T>> {
+    items
+        .iter()
+        .enumerate()
+        .map(|(k, v)| decode(k, v))
+        .collect()
+}
+
 /// Encodes an item result.
 pub fn encode<T: Serialize>(v: &T) -> Result<serde_json::Value> {
     serde_json::to_value(v).map_err(|e| Error::write("item", e))
