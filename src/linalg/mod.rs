@@ -22,7 +22,7 @@ mod symmetric;
 pub use dense_lu::DenseLu;
 pub use solver::{
     BACKWARD_ERROR_LIMIT, Backend, Choice, Factorization, LinearSolver, SYMMETRY_TOLERANCE,
-    SolverStats, symmetric,
+    SolverStats, is_symmetric,
 };
 pub use sparse_matrix::{SparseMatrix, Structure};
 

@@ -122,8 +122,17 @@ pub struct SolverStats {
 
 impl SolverStats {
     /// Counts an accepted factorization `f` of `solver`, which handed over
-    /// `fallbacks` times on the way.
+    /// `fallbacks` times on the way, and takes the solver's latest sizes.
     pub fn record(&mut self, f: &Factorization, fallbacks: usize, solver: &SolverStats) {
+        self.count(f, fallbacks);
+        self.factor_entries = solver.factor_entries;
+        self.matrix_entries = solver.matrix_entries;
+        self.analyses = self.analyses.max(solver.analyses);
+        self.analysis_s = self.analysis_s.max(solver.analysis_s);
+    }
+
+    /// Counts an accepted factorization that handed over `fallbacks` times.
+    fn count(&mut self, f: &Factorization, fallbacks: usize) {
         match f.backend {
             Backend::Ldlt => self.ldlt += 1,
             Backend::Lblt => self.lblt += 1,
@@ -136,10 +145,6 @@ impl SolverStats {
         }
         self.fallbacks += fallbacks;
         self.max_backward_error = self.max_backward_error.max(f.backward_error);
-        self.factor_entries = solver.factor_entries;
-        self.matrix_entries = solver.matrix_entries;
-        self.analyses = self.analyses.max(solver.analyses);
-        self.analysis_s = self.analysis_s.max(solver.analysis_s);
         self.negative_pivots = f.inertia.map(|i| i.0);
     }
 }
@@ -233,24 +238,24 @@ impl LinearSolver {
             return Err(format!("non-finite entry {} at ({r}, {c})", values[k]));
         }
         self.stats.matrix_entries = s.nnz();
+        let symmetric = is_symmetric(&s, &values);
         let candidates: Vec<Backend> = match self.choice {
             Choice::Only(b) => vec![b],
-            Choice::Auto if is_symmetric(&s, &values) => Backend::ALL.to_vec(),
+            Choice::Auto if symmetric => Backend::ALL.to_vec(),
             Choice::Auto => vec![Backend::Lu],
         };
         let mut reasons = vec![];
         for backend in candidates {
-            if backend.symmetric() && !is_symmetric(&s, &values) {
+            if backend.symmetric() && !symmetric {
                 reasons.push(format!(
                     "{}: the matrix is not symmetric (tolerance {SYMMETRY_TOLERANCE:e})",
                     backend.name()
                 ));
                 continue;
             }
-            match self.try_backend(backend, &s, &values) {
+            match self.try_backend(backend, &s, &values, symmetric) {
                 Ok(f) if f.backward_error <= BACKWARD_ERROR_LIMIT => {
-                    let own = self.stats.clone();
-                    self.stats.record(&f, reasons.len(), &own);
+                    self.stats.count(&f, reasons.len());
                     return Ok(f);
                 }
                 Ok(f) => reasons.push(format!(
@@ -265,17 +270,26 @@ impl LinearSolver {
         Err(format!("no factorization passed: {}", reasons.join("; ")))
     }
 
+    // `symmetric` chooses the MUMPS analysis; the faer backends know theirs.
+    #[cfg_attr(not(feature = "mumps"), allow(unused_variables))]
     fn try_backend(
         &mut self,
         backend: Backend,
         s: &Arc<Structure>,
         values: &[f64],
+        symmetric: bool,
     ) -> Result<Factorization, String> {
         let start = Instant::now();
         let mut analysis = self.stats.analysis_s;
         #[cfg(feature = "mumps")]
         if backend == Backend::Mumps {
-            let symmetric = is_symmetric(s, values);
+            // MUMPS is analysed as symmetric (SYM = 2) or general: a change of
+            // symmetry on the same pattern needs a new instance.
+            if let Some(m) = &self.mumps
+                && m.lock().expect("MUMPS lock").symmetric() != symmetric
+            {
+                self.mumps = None;
+            }
             if self.mumps.is_none() {
                 let t = Instant::now();
                 let inst = mumps_backend::Instance::new(s, symmetric)?;
@@ -401,6 +415,7 @@ mod mumps_backend {
     pub struct Instance {
         mumps: Mumps,
         generation: u64,
+        symmetric: bool,
     }
 
     impl Instance {
@@ -415,7 +430,13 @@ mod mumps_backend {
             Ok(Self {
                 mumps,
                 generation: 0,
+                symmetric,
             })
+        }
+
+        /// Analysed as symmetric (SYM = 2).
+        pub fn symmetric(&self) -> bool {
+            self.symmetric
         }
 
         /// Factorizes; returns the generation, the memory figures, the
@@ -440,13 +461,6 @@ mod mumps_backend {
     }
 }
 
-/// Whether (s, values) is symmetric to [`SYMMETRY_TOLERANCE`] (what the
-/// automatic choice tests).
-pub fn symmetric(a: &SparseMatrix) -> Result<bool, String> {
-    let (s, v) = a.compressed(None)?;
-    Ok(is_symmetric(&s, &v))
-}
-
 /// (row, col) of a slot.
 fn position(s: &Structure, k: usize) -> (usize, usize) {
     let c = s.col_ptr().partition_point(|&p| p <= k) - 1;
@@ -454,8 +468,8 @@ fn position(s: &Structure, k: usize) -> (usize, usize) {
 }
 
 /// Symmetric to [`SYMMETRY_TOLERANCE`]: the pattern, and every value
-/// against its transpose.
-fn is_symmetric(s: &Structure, values: &[f64]) -> bool {
+/// against its transpose (what the automatic choice tests).
+pub fn is_symmetric(s: &Structure, values: &[f64]) -> bool {
     let Some(t) = s.transpose_slots() else {
         return false;
     };

@@ -89,7 +89,8 @@ pub fn compare(exe: &Path, matrix: &Path, configs: &[(&str, usize)]) -> Result<V
                 source,
             })?;
         let text = String::from_utf8_lossy(&run.stdout);
-        let v: serde_json::Value = serde_json::from_str(text.trim()).map_err(|e| {
+        // The child's own FactorReport, read back as written.
+        let report: FactorReport = serde_json::from_str(text.trim()).map_err(|e| {
             Error::study(
                 "factor",
                 matrix.display().to_string(),
@@ -99,21 +100,7 @@ pub fn compare(exe: &Path, matrix: &Path, configs: &[(&str, usize)]) -> Result<V
                 ),
             )
         })?;
-        let num = |k: &str| v[k].as_f64().unwrap_or(f64::NAN);
-        out.push(FactorReport {
-            matrix: matrix.display().to_string(),
-            n: v["n"].as_u64().unwrap_or(0) as usize,
-            entries: v["entries"].as_u64().unwrap_or(0) as usize,
-            backend: v["backend"].as_str().unwrap_or("?").to_string(),
-            threads,
-            analysis_s: num("analysis_s"),
-            factorization_s: num("factorization_s"),
-            solve_s: num("solve_s"),
-            factor_entries: v["factor_entries"].as_u64().unwrap_or(0) as usize,
-            backward_error: num("backward_error"),
-            negative_pivots: v["negative_pivots"].as_u64().map(|k| k as usize),
-            peak_rss_bytes: v["peak_rss_bytes"].as_u64(),
-        });
+        out.push(report);
     }
     Ok(out)
 }

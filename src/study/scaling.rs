@@ -201,26 +201,6 @@ pub fn row(size: &SizeRun) -> Result<ScalingRow> {
     })
 }
 
-/// Runs each size in a child `exe run` process and reads its summary.json.
-pub fn run(
-    exe: &Path,
-    template: &Path,
-    sizes: &[(usize, usize)],
-    steps: usize,
-    dir: &Path,
-    write_matrix: bool,
-    mut progress: impl FnMut(&ScalingRow),
-) -> Result<Vec<ScalingRow>> {
-    create_dir(dir)?;
-    let mut rows = vec![];
-    for &size in sizes {
-        let r = row(&run_size(exe, template, size, steps, dir, write_matrix)?)?;
-        progress(&r);
-        rows.push(r);
-    }
-    Ok(rows)
-}
-
 /// The scaling study as a sweep (`anm bench --scaling`): one item per size,
 /// run one after the other in one process (each measures time and peak
 /// memory); the merge writes scaling.md.
