@@ -317,6 +317,19 @@ fn reference_report(
     })
 }
 
+/// The error and its causes, each once: our errors already print their
+/// source (e.g. the I/O error after the file name), which `{:#}` would repeat.
+fn error_chain(e: &anyhow::Error) -> String {
+    let mut msg = e.to_string();
+    for cause in e.chain().skip(1) {
+        let c = cause.to_string();
+        if !msg.ends_with(&c) {
+            msg = format!("{msg}: {c}");
+        }
+    }
+    msg
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     // MPI lives for the whole process (feature mumps): every MUMPS instance
@@ -326,7 +339,7 @@ fn main() -> ExitCode {
     let code = match dispatch(cli) {
         Ok(code) => code,
         Err(e) => {
-            eprintln!("error: {e:#}");
+            eprintln!("error: {}", error_chain(&e));
             ExitCode::FAILURE
         }
     };

@@ -475,7 +475,7 @@ pub fn is_symmetric(s: &Structure, values: &[f64]) -> bool {
     };
     let scale = values.iter().fold(0.0f64, |m, v| m.max(v.abs()));
     values.iter().zip(t).all(|(&a, &k)| {
-        let b = values[k];
+        let b = values[k as usize];
         (a - b).abs() <= SYMMETRY_TOLERANCE * a.abs().max(b.abs()).max(1e-5 * scale)
     })
 }

@@ -17,8 +17,10 @@ pub struct Structure {
     row_idx: Vec<usize>,
     id: u64,
     /// For every slot (i, j), the slot of (j, i); `None` when the pattern is
-    /// not structurally symmetric. Computed on first use.
-    transpose: OnceLock<Option<Vec<usize>>>,
+    /// not structurally symmetric. Computed on first use; 32-bit (half the
+    /// memory: 0.2 GB at a million unknowns), so `None` also when the
+    /// pattern has 2³² entries or more.
+    transpose: OnceLock<Option<Vec<u32>>>,
 }
 
 static NEXT_ID: AtomicU64 = AtomicU64::new(1);
@@ -71,7 +73,10 @@ impl Structure {
         Ok(Self::from_parts(n, col_ptr, row_idx))
     }
 
-    fn from_parts(n: usize, col_ptr: Vec<usize>, row_idx: Vec<usize>) -> Self {
+    fn from_parts(n: usize, mut col_ptr: Vec<usize>, mut row_idx: Vec<usize>) -> Self {
+        // Built by pushes, the arrays may hold up to twice their length.
+        col_ptr.shrink_to_fit();
+        row_idx.shrink_to_fit();
         Self {
             n,
             col_ptr,
@@ -111,13 +116,16 @@ impl Structure {
 
     /// The slot of the transposed position of every slot, if the pattern is
     /// structurally symmetric.
-    pub fn transpose_slots(&self) -> Option<&[usize]> {
+    pub fn transpose_slots(&self) -> Option<&[u32]> {
         self.transpose
             .get_or_init(|| {
+                if u32::try_from(self.nnz()).is_err() {
+                    return None;
+                }
                 let mut t = Vec::with_capacity(self.nnz());
                 for c in 0..self.n {
                     for &r in &self.row_idx[self.col_ptr[c]..self.col_ptr[c + 1]] {
-                        t.push(self.slot(c, r)?);
+                        t.push(self.slot(c, r)? as u32);
                     }
                 }
                 Some(t)
@@ -172,6 +180,37 @@ impl SparseMatrix {
             self.values[k] += value;
         } else {
             self.extra.push((row, col, value));
+        }
+    }
+
+    /// Adds `values[k]` at (`rows[k]`, `col`), rows increasing. One search
+    /// finds the first row; the next ones are taken from the following slots
+    /// when the pattern holds them there (a nodal block's rows are adjacent
+    /// in a node-block pattern), and searched otherwise.
+    pub fn add_sorted_rows(&mut self, rows: &[usize], col: usize, values: &[f64]) {
+        let Some(s) = self.structure.as_deref() else {
+            for (&r, &v) in rows.iter().zip(values) {
+                self.extra.push((r, col, v));
+            }
+            return;
+        };
+        let end = s.col_ptr[col + 1];
+        let mut next = None;
+        for (&r, &v) in rows.iter().zip(values) {
+            let k = match next {
+                Some(k) if k < end && s.row_idx[k] == r => Some(k),
+                _ => s.slot(r, col),
+            };
+            match k {
+                Some(k) => {
+                    self.values[k] += v;
+                    next = Some(k + 1);
+                }
+                None => {
+                    self.extra.push((r, col, v));
+                    next = None;
+                }
+            }
         }
     }
 

@@ -33,9 +33,9 @@ use nalgebra::{Matrix3, SMatrix};
 
 use super::kinematics::{
     NCOL, NDOF_EL, NDOF_Y, NSTRAIN, NSYM, NodalVectors, PackedSym, Point, PointVectors, SYM_INDEX,
-    SYM_PAIRS, Strain, Sym, Vec3, pack, strain, unpack,
+    SYM_PAIRS, Strain, Sym, Vec3, pack, strain,
 };
-use super::material::{DMatrix, Material};
+use super::material::Material;
 use crate::error::{Error, Result};
 
 /// Number of EAS parameters per element.
@@ -77,13 +77,51 @@ fn points() -> &'static [Point; NPT] {
     &POINTS
 }
 
+/// The assumed-strain interpolation at Gauss point `gi`: `[c]` lists the
+/// (sampling point, weight) pairs giving strain component c there. Natural
+/// coordinates only, so shared by every element (it was stored per element:
+/// 12 small vectors per Gauss point, 3.5 kB an element with their headers).
+fn ans_weights(gi: usize) -> &'static [Vec<(usize, f64)>; NSTRAIN] {
+    static WEIGHTS: std::sync::LazyLock<[[Vec<(usize, f64)>; NSTRAIN]; 4]> =
+        std::sync::LazyLock::new(|| {
+            std::array::from_fn(|gi| {
+                let (xi, eta) = SAMPLING[gi];
+                let (nn, _, _) = super::kinematics::shape(xi, eta);
+                std::array::from_fn(|c| match c {
+                    3 | 9 => vec![(4, 0.5 * (1.0 - eta)), (6, 0.5 * (1.0 + eta))],
+                    4 | 10 => vec![(5, 0.5 * (1.0 - xi)), (7, 0.5 * (1.0 + xi))],
+                    5 => (0..4).map(|i| (8 + i, nn[i])).collect(),
+                    _ => vec![(gi, 1.0)],
+                })
+            })
+        });
+    &WEIGHTS[gi]
+}
+
 struct GaussPoint {
     /// Reference area weight |A1 × A2| w.
     da: f64,
-    d: DMatrix,
+    /// The 6×6 material matrix in the natural basis: the shell's 12×12 is
+    /// blockdiag(t D, t³/12 D) (Material::d_shell), stored as D alone
+    /// (3.5 kB an element less, half the products).
+    d: SMatrix<f64, 6, 6>,
     g: GMatrix,
-    /// comb[c]: (sampling point, weight) giving strain component c here.
-    comb: [Vec<(usize, f64)>; NSTRAIN],
+}
+
+impl GaussPoint {
+    /// blockdiag(t D, t³/12 D) e with `moments` = (t, t³/12).
+    fn stress(
+        &self,
+        moments: (f64, f64),
+        e: &SMatrix<f64, NSTRAIN, 1>,
+    ) -> SMatrix<f64, NSTRAIN, 1> {
+        let membrane = self.d * e.fixed_rows::<6>(0) * moments.0;
+        let bending = self.d * e.fixed_rows::<6>(6) * moments.1;
+        let mut s = SMatrix::<f64, NSTRAIN, 1>::zeros();
+        s.fixed_rows_mut::<6>(0).copy_from(&membrane);
+        s.fixed_rows_mut::<6>(6).copy_from(&bending);
+        s
+    }
 }
 
 /// Reference data of one element.
@@ -92,8 +130,10 @@ pub struct ShellElement {
     ref_vec: Vec<PointVectors>,
     gps: Vec<GaussPoint>,
     hinv: SMatrix<f64, NEAS, NEAS>,
+    /// Thickness moments (t, t³/12) of the material matrix.
+    moments: (f64, f64),
     /// The linear map M ↦ Kg(σ(E(M))) on packed symmetric matrices (see
-    /// [`ShellElement::gram_geometric`]).
+    /// [`ShellElement::packed_geometric`]).
     kmap: Box<GeometricMap>,
 }
 
@@ -151,12 +191,10 @@ impl ShellElement {
                     ),
                 });
             }
-            let d = material
-                .d_shell(&gb, thickness)
-                .ok_or_else(|| Error::Element {
-                    element: id,
-                    problem: "degenerate metric at a Gauss point".into(),
-                })?;
+            let d = material.d_natural(&gb).ok_or_else(|| Error::Element {
+                element: id,
+                problem: "degenerate metric at a Gauss point".into(),
+            })?;
             let t = Matrix3::from_fn(|i, k| gb[i].dot(&g0_contra[k]));
             let f = 1.0 / da_ratio;
             let mut g = GMatrix::zeros();
@@ -181,15 +219,11 @@ impl ShellElement {
                 g[(6 + c, 4)] = e[c];
             }
             let da = n.norm();
-            h += g.transpose() * d * g * da;
-            let (nn, _, _) = super::kinematics::shape(xi, eta);
-            let comb: [Vec<(usize, f64)>; NSTRAIN] = std::array::from_fn(|c| match c {
-                3 | 9 => vec![(4, 0.5 * (1.0 - eta)), (6, 0.5 * (1.0 + eta))],
-                4 | 10 => vec![(5, 0.5 * (1.0 - xi)), (7, 0.5 * (1.0 + xi))],
-                5 => (0..4).map(|i| (8 + i, nn[i])).collect(),
-                _ => vec![(gi, 1.0)],
-            });
-            gps.push(GaussPoint { da, d, g, comb });
+            let d_shell = material
+                .d_shell(&gb, thickness)
+                .expect("d_natural succeeded");
+            h += g.transpose() * d_shell * g * da;
+            gps.push(GaussPoint { da, d, g });
         }
         let hinv = h.try_inverse().ok_or_else(|| Error::Element {
             element: id,
@@ -200,6 +234,7 @@ impl ShellElement {
             ref_vec,
             gps,
             hinv,
+            moments: (thickness, thickness * thickness * thickness / 12.0),
             kmap: Box::new(GeometricMap::zeros()),
         };
         el.kmap = el.geometric_map();
@@ -230,13 +265,13 @@ impl ShellElement {
         kg
     }
 
-    /// Kg(σ) of the stresses σ of the nodal Gram matrix M: strain, EAS and
-    /// stresses are linear in M (kinematics::Point::gram_strain), so this is
-    /// one precomputed 28×28 product. With M the order-p Gram coefficient
-    /// Σ_r Y_rᵀY_(p−r), Y_0 Kg_p + … is the order-p internal force on Y
-    /// (B(x)ᵀσ = Y Kg(σ)).
-    pub fn gram_geometric(&self, m: &Sym) -> Sym {
-        unpack(&(self.kmap.as_ref() * pack(m)))
+    /// Kg(σ) of the stresses σ of the nodal Gram matrix M (packed): strain,
+    /// EAS and stresses are linear in M (kinematics::Point::gram_strain), so
+    /// this is one precomputed 28×28 product. With M the order-p Gram
+    /// coefficient Σ_r Y_rᵀY_(p−r), Y_0 Kg_p + … is the order-p internal
+    /// force on Y (B(x)ᵀσ = Y Kg(σ)).
+    pub fn packed_geometric(&self, m: &PackedSym) -> PackedSym {
+        self.kmap.as_ref() * m
     }
 
     /// Kg(σ) of the stresses at the state (x, d), computed pointwise from
@@ -247,30 +282,28 @@ impl ShellElement {
         self.geometric(&self.stresses(&e_pt).0)
     }
 
-    fn combine(&self, gp: &GaussPoint, e_pt: &[Strain; NPT]) -> Strain {
-        std::array::from_fn(|c| gp.comb[c].iter().map(|&(i, w)| w * e_pt[i][c]).sum())
+    /// The assumed strains at Gauss point `gi` from the sampling points.
+    fn combine(gi: usize, e_pt: &[Strain; NPT]) -> SMatrix<f64, NSTRAIN, 1> {
+        let w = ans_weights(gi);
+        SMatrix::from_fn(|c, _| w[c].iter().map(|&(i, w)| w * e_pt[i][c]).sum())
     }
 
     /// EAS condensation and stresses: from the compatible strains at the
     /// sampling points, the stress weights Σ w dA s at the sampling points
     /// (s = D (e_c + G α), α = −H⁻¹ ∫ Gᵀ D e_c) and the Gauss-point stresses.
     fn stresses(&self, e_pt: &[Strain; NPT]) -> ([Strain; NPT], [SMatrix<f64, NSTRAIN, 1>; 4]) {
-        let e_gp: Vec<SMatrix<f64, NSTRAIN, 1>> = self
-            .gps
-            .iter()
-            .map(|gp| SMatrix::<f64, NSTRAIN, 1>::from(self.combine(gp, e_pt)))
-            .collect();
+        let e_gp: [SMatrix<f64, NSTRAIN, 1>; 4] = std::array::from_fn(|gi| Self::combine(gi, e_pt));
         let mut ra = SMatrix::<f64, NEAS, 1>::zeros();
         for (gp, e) in self.gps.iter().zip(&e_gp) {
-            ra += gp.g.transpose() * (gp.d * e) * gp.da;
+            ra += gp.g.transpose() * gp.stress(self.moments, e) * gp.da;
         }
         let alpha = -(self.hinv * ra);
         let mut sig = [[0.0; NSTRAIN]; NPT];
         let mut s_gp = [SMatrix::<f64, NSTRAIN, 1>::zeros(); 4];
         for (k, (gp, e)) in self.gps.iter().zip(&e_gp).enumerate() {
-            let s = gp.d * (e + gp.g * alpha);
-            for c in 0..NSTRAIN {
-                for &(i, w) in &gp.comb[c] {
+            let s = gp.stress(self.moments, &(e + gp.g * alpha));
+            for (c, weights) in ans_weights(k).iter().enumerate() {
+                for &(i, w) in weights {
                     sig[i][c] += w * gp.da * s[c];
                 }
             }

@@ -32,7 +32,7 @@
 // Node/dof/component loops read better with explicit indices.
 #![allow(clippy::needless_range_loop)]
 
-use super::element::ShellElement;
+use super::element::{ElementMatrix, ShellElement};
 use super::kinematics::Vec3;
 use super::material::Material;
 use super::series::ElementSeries;
@@ -432,6 +432,54 @@ impl ShellModel {
         &self.active
     }
 
+    /// Adds an element matrix to the tangent: per column, the free rows of
+    /// each node as one run of adjacent slots (one search per nodal block
+    /// instead of one per entry); a fixed column j held at lambda p_j goes to
+    /// the lambda column as K_ij p_j.
+    fn scatter_element(
+        &self,
+        e: &ShellElement,
+        ke: &ElementMatrix,
+        k: &mut SparseMatrix,
+        rl: &mut [f64],
+    ) {
+        // Free rows of each node: (local row, free index).
+        let mut rows = [[(0usize, 0usize); 6]; 4];
+        let mut counts = [0usize; 4];
+        for (a, &n) in e.nodes.iter().enumerate() {
+            for c in 0..6 {
+                if let Some(i) = self.free[dof(n, c)] {
+                    rows[a][counts[a]] = (6 * a + c, i);
+                    counts[a] += 1;
+                }
+            }
+        }
+        let (mut idx, mut vals) = ([0usize; 6], [0.0; 6]);
+        for b in 0..24 {
+            let gb = dof(e.nodes[b / 6], b % 6);
+            match self.free[gb] {
+                Some(j) => {
+                    for a in 0..4 {
+                        let run = &rows[a][..counts[a]];
+                        for (m, &(la, i)) in run.iter().enumerate() {
+                            idx[m] = i;
+                            vals[m] = ke[(la, b)];
+                        }
+                        k.add_sorted_rows(&idx[..run.len()], j, &vals[..run.len()]);
+                    }
+                }
+                None => {
+                    for a in 0..4 {
+                        for &(la, _) in &rows[a][..counts[a]] {
+                            let ga = dof(e.nodes[la / 6], la % 6);
+                            rl[ga] += ke[(la, b)] * self.prescribed[gb];
+                        }
+                    }
+                }
+            }
+        }
+    }
+
     /// Order 0 of the step's series at u0: element series (which also give
     /// the element tangents) and contact pair series.
     fn start_series(&mut self, u0: &[f64], lambda0: f64) -> Result<()> {
@@ -531,14 +579,6 @@ impl ContinuationProblem for ShellModel {
         for (r, f) in rl.iter_mut().zip(&self.dead) {
             *r = -f;
         }
-        let prescribed = &self.prescribed;
-        let mut add = |free: &[Option<usize>], rl: &mut [f64], gi: usize, gj: usize, v: f64| match (
-            free[gi], free[gj],
-        ) {
-            (Some(i), Some(j)) => k.add(i, j, v),
-            (Some(_), None) => rl[gi] += v * prescribed[gj],
-            _ => {}
-        };
         // Element matrices in parallel, by chunks (bounded memory), added in
         // element order.
         for (elements, series) in self
@@ -548,19 +588,22 @@ impl ContinuationProblem for ShellModel {
         {
             let kes: Vec<_> = series
                 .par_iter()
+                .zip(elements.par_iter())
                 .with_min_len(PAR_MIN)
-                .map(|st| st.tangent())
+                .map(|(st, e)| st.tangent(e))
                 .collect();
             for (e, ke) in elements.iter().zip(&kes) {
-                for a in 0..24 {
-                    let ga = dof(e.nodes[a / 6], a % 6);
-                    for b in 0..24 {
-                        let gb = dof(e.nodes[b / 6], b % 6);
-                        add(&self.free, &mut rl, ga, gb, ke[(a, b)]);
-                    }
-                }
+                self.scatter_element(e, ke, &mut k, &mut rl);
             }
         }
+        let prescribed = &self.prescribed;
+        let mut add = |free: &[Option<usize>], rl: &mut [f64], gi: usize, gj: usize, v: f64| match (
+            free[gi], free[gj],
+        ) {
+            (Some(i), Some(j)) => k.add(i, j, v),
+            (Some(_), None) => rl[gi] += v * prescribed[gj],
+            _ => {}
+        };
         for c in &self.follower {
             let a3 = self.a30[c.node] + Self::vec3(&full, c.node, 3);
             let fw = c.moment.cross(&a3);

@@ -14,7 +14,7 @@
 //! ```
 //!
 //! with K the element's precomputed linear map M ↦ Kg(σ(E(M)))
-//! ([`ShellElement::gram_geometric`]) and f*_p the right-hand side of order p
+//! ([`ShellElement::packed_geometric`]) and f*_p the right-hand side of order p
 //! (order-p unknowns set to zero). The convolutions run on 3×7 and 7×7
 //! matrices instead of the 12 sampling points, and the strain-to-stress path
 //! (ANS, EAS, material) costs one 28×28 product per order.
@@ -23,38 +23,70 @@
 //! ([`ShellElement::state_geometric`]): M_0 would subtract two nearly equal
 //! Gram matrices.
 
-use super::element::{ElementMatrix, GramJacobian, ShellElement};
+use super::element::{ElementMatrix, ShellElement};
 use super::kinematics::{
-    NDOF_EL, NDOF_Y, NodalVectors, Sym, Vec3, YMatrix, element_force, element_matrix,
-    nodal_vectors, unpack,
+    NCOL, NDOF_EL, NDOF_Y, NodalVectors, PackedSym, SYM_INDEX, SYM_PAIRS, Vec3, YMatrix,
+    element_force, element_matrix, nodal_vectors, pack, unpack,
 };
 
 /// Series of one element over an ANM step: nodal vectors and geometric
 /// stiffnesses of every complete order.
+///
+/// Memory is what limits the model size (one of these per element): the
+/// stiffnesses are stored packed (28 of the 49 entries of a symmetric 7×7),
+/// and the order-1 map T = K(Y_0ᵀδY + δYᵀY_0) (28×21, 4.7 kB) is not stored
+/// but rebuilt by the tangent, its only user; an order is completed through
+/// K directly, Kg_m = K(M*_m) + K(Y_0ᵀY_m + Y_mᵀY_0).
 #[derive(Clone)]
 pub struct ElementSeries {
     y: Vec<NodalVectors>,
-    kg: Vec<Sym>,
-    /// T = K(Y_0ᵀδY + δYᵀY_0) per unknown: the order-1 map, which gives
-    /// the tangent and completes an order, Kg_p = Kg*_p + T q_p.
-    t: Box<GramJacobian>,
+    kg: Vec<PackedSym>,
     /// Kg*_p = K(M*_p) of the last right-hand side, with its order p.
-    kg_star: Option<(usize, Sym)>,
+    kg_star: Option<(usize, PackedSym)>,
 }
 
-/// Σ_{r=lo}^{p−lo} Y_rᵀ Y_{p−r}, symmetric: each pair (r, p−r) once.
-fn gram_convolution(y: &[NodalVectors], p: usize, lo: usize) -> Sym {
-    let mut half = Sym::zeros();
+/// Σ_{r=lo}^{p−lo} Y_rᵀ Y_{p−r}, packed: each pair (r, p−r) once, and
+/// only the 28 entries of the symmetric result.
+fn gram_convolution(y: &[NodalVectors], p: usize, lo: usize) -> PackedSym {
+    let mut m = PackedSym::zeros();
     let mut r = lo;
     while 2 * r < p {
-        half += y[r].tr_mul(&y[p - r]);
+        add_gram_pair(&y[r], &y[p - r], &mut m);
         r += 1;
     }
-    let mut m = half + half.transpose();
     if p.is_multiple_of(2) && p / 2 >= lo {
-        m += y[p / 2].tr_mul(&y[p / 2]);
+        let h = &y[p / 2];
+        for (k, &(a, b)) in SYM_PAIRS.iter().enumerate() {
+            m[k] += (0..3).map(|d| h[(d, a)] * h[(d, b)]).sum::<f64>();
+        }
     }
     m
+}
+
+/// m += YᵣᵀYₛ + YₛᵀYᵣ, packed.
+fn add_gram_pair(yr: &NodalVectors, ys: &NodalVectors, m: &mut PackedSym) {
+    for (k, &(a, b)) in SYM_PAIRS.iter().enumerate() {
+        m[k] += (0..3)
+            .map(|d| yr[(d, a)] * ys[(d, b)] + ys[(d, a)] * yr[(d, b)])
+            .sum::<f64>();
+    }
+}
+
+/// f += Y Kg for a packed symmetric Kg: (Y Kg)_{:,b} = Σ_a Y_{:,a} Kg_ab
+/// (constant bounds and indices: the loops unroll, no branch).
+fn add_product(y: &NodalVectors, kg: &PackedSym, f: &mut NodalVectors) {
+    for b in 0..NCOL {
+        let mut col = [0.0; 3];
+        for a in 0..NCOL {
+            let v = kg[SYM_INDEX[a][b]];
+            for (d, c) in col.iter_mut().enumerate() {
+                *c += y[(d, a)] * v;
+            }
+        }
+        for (d, c) in col.iter().enumerate() {
+            f[(d, b)] += c;
+        }
+    }
 }
 
 impl ElementSeries {
@@ -62,9 +94,8 @@ impl ElementSeries {
     pub fn start(e: &ShellElement, x0: &[Vec3; 4], d0: &[Vec3; 4]) -> Self {
         let y0 = nodal_vectors(x0, d0);
         Self {
-            t: Box::new(e.gram_jacobian(&y0)),
             y: vec![y0],
-            kg: vec![e.state_geometric(x0, d0)],
+            kg: vec![pack(&e.state_geometric(x0, d0))],
             kg_star: None,
         }
     }
@@ -76,10 +107,10 @@ impl ElementSeries {
     /// The condensed tangent at the step start, f_1 = K_t q_1: on Y,
     /// δf = δY Kg_0 + Y_0 K(Y_0ᵀδY + δYᵀY_0), the geometric part Kg_0 ⊗ I3
     /// and the material part Y_0 T; then mapped to the element unknowns.
-    pub fn tangent(&self) -> ElementMatrix {
-        let (y0, kg0) = (&self.y[0], &self.kg[0]);
+    pub fn tangent(&self, e: &ShellElement) -> ElementMatrix {
+        let (y0, kg0) = (&self.y[0], unpack(&self.kg[0]));
         let mut k = YMatrix::zeros();
-        for (j, t) in self.t.column_iter().enumerate() {
+        for (j, t) in e.gram_jacobian(y0).column_iter().enumerate() {
             let df = y0 * unpack(&t.into_owned());
             k.column_mut(j).copy_from_slice(df.as_slice());
         }
@@ -92,18 +123,19 @@ impl ElementSeries {
     }
 
     /// Completes order m = orders() from the order-m nodal increments:
-    /// Kg_m = K(M*_m) + T q_m, with K(M*_m) from the right-hand side of
-    /// order m when it was computed.
+    /// Kg_m = K(M*_m) + K(Y_0ᵀY_m + Y_mᵀY_0), with K(M*_m) from the
+    /// right-hand side of order m when it was computed.
     pub fn complete(&mut self, e: &ShellElement, xm: &[Vec3; 4], dm: &[Vec3; 4]) {
         let m = self.y.len();
         let kg_star = match self.kg_star.take() {
             Some((p, kg)) if p == m => kg,
-            _ if m == 1 => Sym::zeros(),
-            _ => e.gram_geometric(&gram_convolution(&self.y, m, 1)),
+            _ if m == 1 => PackedSym::zeros(),
+            _ => e.packed_geometric(&gram_convolution(&self.y, m, 1)),
         };
         let ym = nodal_vectors(xm, dm);
-        let q = nalgebra::SVector::<f64, NDOF_Y>::from_column_slice(ym.as_slice());
-        self.kg.push(kg_star + unpack(&(self.t.as_ref() * q)));
+        let mut first = PackedSym::zeros();
+        add_gram_pair(&self.y[0], &ym, &mut first);
+        self.kg.push(kg_star + e.packed_geometric(&first));
         self.y.push(ym);
     }
 
@@ -112,10 +144,11 @@ impl ElementSeries {
     pub fn rhs(&mut self, e: &ShellElement) -> [f64; NDOF_EL] {
         let p = self.y.len();
         let y = &self.y;
-        let kg_star = e.gram_geometric(&gram_convolution(y, p, 1));
-        let mut f = y[0] * kg_star;
+        let kg_star = e.packed_geometric(&gram_convolution(y, p, 1));
+        let mut f = NodalVectors::zeros();
+        add_product(&y[0], &kg_star, &mut f);
         for (yr, kg) in y[1..].iter().zip(self.kg[1..].iter().rev()) {
-            f += yr * kg;
+            add_product(yr, kg, &mut f);
         }
         self.kg_star = Some((p, kg_star));
         element_force(&f)
@@ -198,7 +231,7 @@ mod tests {
             SVector::from_fn(|k, _| (0..7).map(|j| vinv[(p, j)] * forces[j][k]).sum())
         };
         let mut st = ElementSeries::start(&e, &xs0, &ds0);
-        let kt = st.tangent();
+        let kt = st.tangent(&e);
         let q = |p: usize| -> SVector<f64, NDOF_EL> {
             if p > 2 {
                 return SVector::zeros();

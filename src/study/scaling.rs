@@ -358,6 +358,9 @@ pub fn markdown(rows: &[ScalingRow]) -> String {
                 .collect::<Vec<_>>(),
         )
     };
+    if rows.len() < 2 {
+        return s;
+    }
     s += &format!(
         "\nFitted exponents b in cost ∝ n^b (n unknowns): time per step {:.2}, factorization {:.2}, solves {:.2}, series terms {:.2}, assembly {:.2}, peak memory {:.2}.\n",
         fit(&|r| r.step_s()),
