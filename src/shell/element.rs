@@ -77,24 +77,26 @@ fn points() -> &'static [Point; NPT] {
     &POINTS
 }
 
+/// Per strain component, the (sampling point, weight) pairs that give it.
+type AnsWeights = [Vec<(usize, f64)>; NSTRAIN];
+
 /// The assumed-strain interpolation at Gauss point `gi`: `[c]` lists the
 /// (sampling point, weight) pairs giving strain component c there. Natural
 /// coordinates only, so shared by every element (it was stored per element:
 /// 12 small vectors per Gauss point, 3.5 kB an element with their headers).
-fn ans_weights(gi: usize) -> &'static [Vec<(usize, f64)>; NSTRAIN] {
-    static WEIGHTS: std::sync::LazyLock<[[Vec<(usize, f64)>; NSTRAIN]; 4]> =
-        std::sync::LazyLock::new(|| {
-            std::array::from_fn(|gi| {
-                let (xi, eta) = SAMPLING[gi];
-                let (nn, _, _) = super::kinematics::shape(xi, eta);
-                std::array::from_fn(|c| match c {
-                    3 | 9 => vec![(4, 0.5 * (1.0 - eta)), (6, 0.5 * (1.0 + eta))],
-                    4 | 10 => vec![(5, 0.5 * (1.0 - xi)), (7, 0.5 * (1.0 + xi))],
-                    5 => (0..4).map(|i| (8 + i, nn[i])).collect(),
-                    _ => vec![(gi, 1.0)],
-                })
+fn ans_weights(gi: usize) -> &'static AnsWeights {
+    static WEIGHTS: std::sync::LazyLock<[AnsWeights; 4]> = std::sync::LazyLock::new(|| {
+        std::array::from_fn(|gi| {
+            let (xi, eta) = SAMPLING[gi];
+            let (nn, _, _) = super::kinematics::shape(xi, eta);
+            std::array::from_fn(|c| match c {
+                3 | 9 => vec![(4, 0.5 * (1.0 - eta)), (6, 0.5 * (1.0 + eta))],
+                4 | 10 => vec![(5, 0.5 * (1.0 - xi)), (7, 0.5 * (1.0 + xi))],
+                5 => (0..4).map(|i| (8 + i, nn[i])).collect(),
+                _ => vec![(gi, 1.0)],
             })
-        });
+        })
+    });
     &WEIGHTS[gi]
 }
 
