@@ -64,9 +64,40 @@ pub struct StepRow {
     pub solves: usize,
     /// Negative pivots of the step-start tangent (symmetric factorizations).
     pub negative_pivots: Option<usize>,
+    /// Critical points found at this step's end (in this step or the one
+    /// before: `EventRecord::step` says which).
+    pub events: Vec<EventRecord>,
 }
 
-const STEP_COLUMNS: [&str; 10] = [
+/// A critical point of the path as written to summary.json (`events`) and
+/// steps.csv (columns `event*`, several events of one row joined by `;`).
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct EventRecord {
+    /// `bifurcation`, `limit_point` or `geometric`
+    /// ([`crate::series::bifurcation::Kind`]).
+    pub kind: String,
+    pub lambda: f64,
+    /// The steps.csv step whose series holds the point.
+    pub step: usize,
+    /// Path parameter on that step's series.
+    pub a: f64,
+    /// Negative pivots of the tangent before and after the point.
+    pub negative_pivots: Option<(usize, usize)>,
+    /// Final bracket width in lambda (0: estimate without bracket).
+    pub bracket: f64,
+    /// Smallest eigenvalue of the tangent at the point (the test function).
+    pub kappa: f64,
+    /// Tangent factorizations spent locating it.
+    pub factorizations: usize,
+    /// The mode's VTK file (in the output folder), if written.
+    pub mode: Option<String>,
+    /// The mode's dominant wavelength.
+    pub wavelength: Option<f64>,
+    pub half_waves: Option<f64>,
+    pub wave_direction: Option<String>,
+}
+
+const STEP_COLUMNS: [&str; 14] = [
     "step",
     "lambda_start",
     "lambda_end",
@@ -77,6 +108,10 @@ const STEP_COLUMNS: [&str; 10] = [
     "factorizations",
     "solves",
     "negative_pivots",
+    "event",
+    "event_lambda",
+    "event_step",
+    "event_mode",
 ];
 
 /// What the recorder keeps between steps: written into the checkpoint. The
@@ -97,6 +132,9 @@ pub struct RecorderState {
     pub active_sum: usize,
     /// Wall time of the run before a resume.
     pub wall_s_before: f64,
+    /// Critical points found so far.
+    #[serde(default)]
+    pub events: Vec<EventRecord>,
 }
 
 pub struct Recorder<'s> {
@@ -290,6 +328,10 @@ impl<'s> Recorder<'s> {
                 r.factorizations.to_string(),
                 r.solves.to_string(),
                 r.negative_pivots.map(|k| k.to_string()).unwrap_or_default(),
+                join(&r.events, |e| e.kind.clone()),
+                join(&r.events, |e| format!("{:.17e}", e.lambda)),
+                join(&r.events, |e| e.step.to_string()),
+                join(&r.events, |e| e.mode.clone().unwrap_or_default()),
             ];
             w.write_record(&rec)
                 .and_then(|_| w.flush().map_err(csv::Error::from))
@@ -348,6 +390,11 @@ impl<'s> Recorder<'s> {
         let path = d.join("checkpoint.json");
         std::fs::rename(&tmp, &path).map_err(io_err(&path))
     }
+}
+
+/// One steps.csv cell for the events of a row: their values joined by `;`.
+fn join(events: &[EventRecord], f: impl Fn(&EventRecord) -> String) -> String {
+    events.iter().map(f).collect::<Vec<_>>().join(";")
 }
 
 /// The mid-surface fields at a state.

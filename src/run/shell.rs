@@ -9,7 +9,7 @@ use super::build::build_model;
 use super::interrupt;
 use super::probe::State;
 pub use super::recorder::Snapshot;
-use super::recorder::{Recorder, RecorderState, StepRow};
+use super::recorder::{EventRecord, Recorder, RecorderState, StepRow};
 use crate::contact::{Obstacle, search};
 use crate::error::{Error, Result};
 use crate::linalg::LinearSolver;
@@ -19,8 +19,9 @@ use crate::output::{Stop, write_csv, write_json};
 use crate::scene::shell::{Method, ShellScene, load};
 use crate::series::correct::Metric;
 use crate::series::path::{Checkpoint, Path as AnmPath};
+use crate::series::bifurcation::{self, Event};
 use crate::series::stop::Stop as PathStop;
-use crate::series::{ContinuationProblem, Stats, correct};
+use crate::series::{ContinuationProblem, PathStep, Stats, correct};
 use crate::shell::ShellModel;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -62,6 +63,9 @@ pub struct RunReport {
     /// Step at which this run was resumed, if it was.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub resumed_at_step: Option<usize>,
+    /// Critical points of the path (limit points, bifurcations, geometric
+    /// series), in path order.
+    pub events: Vec<EventRecord>,
     /// history.csv: column names (lambda, then the probes).
     pub columns: Vec<String>,
     #[serde(skip)]
@@ -317,6 +321,14 @@ fn run_inner(
                 Some(cp) => AnmPath::resume(&mut model, cp, cfg.clone()),
                 None => AnmPath::new(&mut model, zero.clone(), 0.0, cfg.clone()),
             };
+            // The step before the current one: its end inertia is the
+            // current step's start inertia (critical points, DESIGN §8).
+            let mut pending: Option<PathStep> = None;
+            let mut event_lu = LinearSolver::new(cfg.linear);
+            let locate = bifurcation::Settings {
+                lambda_scale: cfg.lambda_scale,
+                ..Default::default()
+            };
             let stop = loop {
                 if interrupt::requested() {
                     break PathStop::Interrupted {
@@ -367,6 +379,37 @@ fn run_inner(
                     )?;
                 }
                 rec.state.arclength = arc0 + step.length;
+                let mut events = vec![];
+                if let Some(prev) = pending.take() {
+                    events.extend(critical_points(
+                        model,
+                        &mut event_lu,
+                        &prev,
+                        step.negative_pivots,
+                        Some(step.lambda[1]),
+                        &locate,
+                    )?);
+                }
+                if let Some(g) = step.geometric {
+                    events.push(bifurcation::geometric(&step, g.distance));
+                }
+                if path_at_end(&step, &cfg) {
+                    let n1 = end_inertia(model, &mut event_lu, &step.u_end, step.lambda_end)?;
+                    events.extend(critical_points(
+                        model,
+                        &mut event_lu,
+                        &step,
+                        n1,
+                        None,
+                        &locate,
+                    )?);
+                } else {
+                    pending = Some(step.clone());
+                }
+                let events: Vec<EventRecord> = events
+                    .into_iter()
+                    .map(|e| record_event(&mut rec, model, e))
+                    .collect::<Result<_>>()?;
                 rec.step(&StepRow {
                     step: step.index + 1,
                     lambda_start: step.lambda[0],
@@ -378,6 +421,7 @@ fn run_inner(
                     factorizations: stats.factorizations,
                     solves: stats.solves,
                     negative_pivots: step.negative_pivots,
+                    events,
                 })?;
                 let every = scene.output.vtk_every;
                 if every > 0 && (step.index + 1).is_multiple_of(every) {
@@ -398,6 +442,17 @@ fn run_inner(
                 })?;
                 show(step.lambda_end, &stats, "");
             };
+            // A path stopped before its end: the last step's critical
+            // points against the tangent at its end (summary.json only).
+            if let Some(prev) = pending.take() {
+                let (u, l) = path.state();
+                let (u, l) = (u.to_vec(), l);
+                let model: &mut ShellModel = path.problem();
+                let n1 = end_inertia(model, &mut event_lu, &u, l)?;
+                for e in critical_points(model, &mut event_lu, &prev, n1, None, &locate)? {
+                    record_event(&mut rec, model, e)?;
+                }
+            }
             let (u, l) = path.state();
             (stop, path.stats().clone(), (u.to_vec(), l))
         }
@@ -439,6 +494,7 @@ fn run_inner(
                         factorizations: stats.factorizations,
                         solves: stats.solves,
                         negative_pivots: stats.linear.negative_pivots,
+                        events: vec![],
                     })?;
                     if grid.iter().any(|g| (g - lambda).abs() < 1e-12) {
                         let g = (lambda / d).round() * d;
@@ -507,6 +563,7 @@ fn run_inner(
                 factorizations: 1,
                 solves: 1,
                 negative_pivots: stats.linear.negative_pivots,
+                events: vec![],
             })?;
             let u: Vec<f64> = u1.iter().map(|x| x * l_end).collect();
             (PathStop::End { lambda: l_end }, stats, (u, l_end))
@@ -586,6 +643,7 @@ fn run_inner(
         peak_rss_bytes: crate::output::peak_rss_bytes(),
         far_nodes_skipped: far_skipped,
         resumed_at_step,
+        events: rec.state.events.clone(),
         columns: rec.columns.clone(),
         history: rec.state.history.clone(),
         snapshots: rec.state.snapshots.clone(),
@@ -602,6 +660,92 @@ fn run_inner(
         }
     }
     Ok(report)
+}
+
+/// Whether the step reached the path's target (it is the last one).
+fn path_at_end(step: &PathStep, cfg: &crate::series::ContinuationConfig) -> bool {
+    let forward = if cfg.lambda_end >= step.lambda[0] {
+        1.0
+    } else {
+        -1.0
+    };
+    (step.lambda_end - cfg.lambda_end) * forward >= -1e-14 * cfg.lambda_end.abs().max(1.0)
+}
+
+/// Negative pivots of the tangent at (u, lambda) (None when it is not
+/// symmetric): the inertia at the end of the last step.
+fn end_inertia(
+    model: &mut ShellModel,
+    lu: &mut LinearSolver,
+    u: &[f64],
+    lambda: f64,
+) -> Result<Option<usize>> {
+    let (k, _) = model.tangent(u, lambda)?;
+    let f = lu.factorize(&k).map_err(|detail| Error::SingularMatrix {
+        step: 0,
+        param: "lambda",
+        at: lambda,
+        detail: format!("tangent at the path's end: {detail}"),
+    })?;
+    Ok(f.inertia().map(|i| i.0))
+}
+
+/// The critical points that `step` crosses, given the negative pivots `n1`
+/// and lambda_1 `next_l1` at its end (series::bifurcation): located on the
+/// step's series when the inertia changes; a limit point from dlambda/da
+/// when only lambda_1 changes sign (non-symmetric tangents).
+fn critical_points(
+    model: &mut ShellModel,
+    lu: &mut LinearSolver,
+    step: &PathStep,
+    n1: Option<usize>,
+    next_l1: Option<f64>,
+    settings: &bifurcation::Settings,
+) -> Result<Vec<Event>> {
+    match (step.negative_pivots, n1) {
+        (Some(n0), Some(n1)) if n0 != n1 => {
+            bifurcation::locate(model, step, n0, n1, lu, settings)
+        }
+        (Some(_), Some(_)) => Ok(vec![]),
+        _ => Ok(match next_l1 {
+            Some(l1) if l1.signum() != step.lambda[1].signum() => {
+                vec![bifurcation::limit_point(step)]
+            }
+            _ => vec![],
+        }),
+    }
+}
+
+/// Records an event: its mode as `mode_K.vtu` (K counts the run's events
+/// from 1) and its dominant wavelength.
+fn record_event(rec: &mut Recorder, model: &ShellModel, e: Event) -> Result<EventRecord> {
+    let k = rec.state.events.len() + 1;
+    let full = model.expand(&e.mode, 0.0);
+    let wave = crate::output::mode::wavelength(&model.x0, &full);
+    let mode = match &rec.dir {
+        Some(d) => {
+            let name = format!("mode_{k}.vtu");
+            crate::output::mode::write(&d.join(&name), &model.x0, &rec.scene.mesh.quads, &full)?;
+            Some(name)
+        }
+        None => None,
+    };
+    let r = EventRecord {
+        kind: e.kind.name().to_string(),
+        lambda: e.lambda,
+        step: e.step + 1,
+        a: e.a,
+        negative_pivots: e.negative_pivots,
+        bracket: e.bracket,
+        kappa: e.kappa,
+        factorizations: e.factorizations,
+        mode,
+        wavelength: wave.map(|w| w.wavelength),
+        half_waves: wave.map(|w| w.half_waves),
+        wave_direction: wave.map(|w| w.direction.to_string()),
+    };
+    rec.state.events.push(r.clone());
+    Ok(r)
 }
 
 /// Borrowed form of [`RunCheckpoint`] for writing.
