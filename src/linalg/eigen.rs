@@ -163,7 +163,11 @@ pub fn pencil(
         let c = 0.5 * (&c + c.transpose());
         let eig = c.symmetric_eigen();
         let mut order: Vec<usize> = (0..q).collect();
-        order.sort_by(|&i, &j| eig.eigenvalues[j].abs().total_cmp(&eig.eigenvalues[i].abs()));
+        order.sort_by(|&i, &j| {
+            eig.eigenvalues[j]
+                .abs()
+                .total_cmp(&eig.eigenvalues[i].abs())
+        });
         // Ritz vectors z = L⁻ᵀ w (A-orthonormal), X = Y Z, and A X, B X.
         let z = l_inv.transpose() * &eig.eigenvectors;
         let combine = |basis: &[Vec<f64>], col: usize| -> Vec<f64> {
@@ -281,11 +285,21 @@ mod tests {
             tol: 1e-9,
             max_iter: 500,
         };
-        let (pairs, _) = pencil(&f, &|x| a.mul_vec(x), &|x| x.iter().map(|v| -v).collect(), m, &s)
-            .unwrap();
+        let (pairs, _) = pencil(
+            &f,
+            &|x| a.mul_vec(x),
+            &|x| x.iter().map(|v| -v).collect(),
+            m,
+            &s,
+        )
+        .unwrap();
         for (j, p) in pairs.iter().enumerate() {
             let exact = 2.0 - 2.0 * ((j + 1) as f64 * std::f64::consts::PI / (m + 1) as f64).cos();
-            assert!((p.mu / exact - 1.0).abs() < 1e-10, "{j}: {} vs {exact}", p.mu);
+            assert!(
+                (p.mu / exact - 1.0).abs() < 1e-10,
+                "{j}: {} vs {exact}",
+                p.mu
+            );
         }
     }
 

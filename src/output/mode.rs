@@ -82,12 +82,18 @@ pub fn wavelength(x0: &[Vec3], full: &[f64]) -> Option<Wavelength> {
     // (component, node) of the largest displacement entry.
     let (comp, node) = (0..3)
         .flat_map(|k| (0..n).map(move |i| (k, i)))
-        .max_by(|a, b| full[dof(a.1, a.0)].abs().total_cmp(&full[dof(b.1, b.0)].abs()))?;
+        .max_by(|a, b| {
+            full[dof(a.1, a.0)]
+                .abs()
+                .total_cmp(&full[dof(b.1, b.0)].abs())
+        })?;
     if full[dof(node, comp)] == 0.0 {
         return None;
     }
     let lo = x0.iter().fold(Vec3::repeat(f64::INFINITY), |m, x| m.inf(x));
-    let hi = x0.iter().fold(Vec3::repeat(f64::NEG_INFINITY), |m, x| m.sup(x));
+    let hi = x0
+        .iter()
+        .fold(Vec3::repeat(f64::NEG_INFINITY), |m, x| m.sup(x));
     let size = (hi - lo).max();
     let tol = 0.5 * size / (n as f64).sqrt();
     let mut best: Option<Wavelength> = None;

@@ -17,9 +17,9 @@ use crate::output::plot::{Curve, Panel, draw};
 use crate::output::vtk::{cylinder_surface, write_pvd, write_vtu};
 use crate::output::{Stop, write_csv, write_json};
 use crate::scene::shell::{Method, ShellScene, load};
+use crate::series::bifurcation::{self, Event};
 use crate::series::correct::Metric;
 use crate::series::path::{Checkpoint, Path as AnmPath};
-use crate::series::bifurcation::{self, Event};
 use crate::series::stop::Stop as PathStop;
 use crate::series::{ContinuationProblem, PathStep, Stats, correct};
 use crate::shell::ShellModel;
@@ -703,9 +703,7 @@ fn critical_points(
     settings: &bifurcation::Settings,
 ) -> Result<Vec<Event>> {
     match (step.negative_pivots, n1) {
-        (Some(n0), Some(n1)) if n0 != n1 => {
-            bifurcation::locate(model, step, n0, n1, lu, settings)
-        }
+        (Some(n0), Some(n1)) if n0 != n1 => bifurcation::locate(model, step, n0, n1, lu, settings),
         (Some(_), Some(_)) => Ok(vec![]),
         _ => Ok(match next_l1 {
             Some(l1) if l1.signum() != step.lambda[1].signum() => {

@@ -143,19 +143,13 @@ pub fn buckle(
         count,
         ..Default::default()
     };
-    let (pairs, work) = eigen::pencil(
-        &f0,
-        &|x| k0.mul_vec(x),
-        &|x| ks.mul_vec(x),
-        n,
-        &settings,
-    )
-    .map_err(|detail| Error::SingularMatrix {
-        step: path_steps,
-        param: "lambda",
-        at: lambda_base,
-        detail: format!("buckling eigenproblem: {detail}"),
-    })?;
+    let (pairs, work) = eigen::pencil(&f0, &|x| k0.mul_vec(x), &|x| ks.mul_vec(x), n, &settings)
+        .map_err(|detail| Error::SingularMatrix {
+            step: path_steps,
+            param: "lambda",
+            at: lambda_base,
+            detail: format!("buckling eigenproblem: {detail}"),
+        })?;
     let mut modes = vec![];
     for (i, p) in pairs.into_iter().enumerate() {
         let full = model.expand(&p.vector, 0.0);

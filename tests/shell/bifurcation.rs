@@ -1,0 +1,159 @@
+//! Critical points and buckling (issue 14, DESIGN §8) against closed forms:
+//! the Euler column (cantilever strip, P_cr = pi² E I / (4 L²)) by
+//! `anm buckle` and located on the ANM path, its post-buckled branch
+//! against the elastica, and the simply supported square plate under
+//! uniaxial compression (sigma_cr = 4 pi² E t² / (12 (1 − nu²) b²)). The
+//! scenes put P_cr (resp. sigma_cr t) at lambda = 1.
+
+use anm::run::run_loaded;
+use anm::scene::shell::{ShellScene, load};
+use anm::study::buckle::buckle;
+use std::f64::consts::PI;
+
+fn scene(name: &str) -> ShellScene {
+    let path = format!(
+        "{}/scenes/verification/{name}.toml",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    load(std::path::Path::new(&path)).unwrap_or_else(|e| panic!("{name}: {e}"))
+}
+
+/// Complete elliptic integral of the first kind K(k) = pi / (2 AGM(1,
+/// sqrt(1 − k²))) (Abramowitz & Stegun 17.6; DLMF 19.8.5).
+fn elliptic_k(k: f64) -> f64 {
+    let (mut a, mut b) = (1.0f64, (1.0 - k * k).sqrt());
+    while (a - b).abs() > 1e-15 * a {
+        (a, b) = (0.5 * (a + b), (a * b).sqrt());
+    }
+    PI / (2.0 * a)
+}
+
+/// Elastica of the clamped–free column: P / P_cr = (2 K(sin(alpha/2)) / pi)².
+fn elastica(alpha: f64) -> f64 {
+    (2.0 * elliptic_k((0.5 * alpha).sin()) / PI).powi(2)
+}
+
+#[test]
+fn elliptic_integral_by_the_agm_matches_tabulated_values() {
+    // A&S Table 17.1: K(sin 30°) = 1.685750355, K(sin 60°) = 2.156515647.
+    assert!((elliptic_k(0.5) - 1.685_750_355).abs() < 1e-9);
+    assert!((elliptic_k(60f64.to_radians().sin()) - 2.156_515_647).abs() < 1e-9);
+    assert!((elastica(1e-6) - 1.0).abs() < 1e-10);
+}
+
+#[test]
+fn euler_column_buckle_and_path_bifurcation_match_the_closed_form() {
+    let sc = scene("euler-column");
+    let b = buckle(&sc, 0.0, 2, None).expect("buckle");
+    print!("{}", anm::study::buckle::table(&b));
+    let mu = b.modes[0].mu;
+    println!("| case | lambda_cr | closed form | relative error |\n|---|---|---|---|");
+    println!("| anm buckle (20 x 1) | {mu:.9} | 1 | {:.2e} |", mu - 1.0);
+    assert!((mu - 1.0).abs() <= 5e-3, "buckle: {mu}");
+    // The second mode: (3 pi / 2L)² → 9 P_cr.
+    assert!(
+        (b.modes[1].mu / 9.0 - 1.0).abs() <= 2e-2,
+        "{}",
+        b.modes[1].mu
+    );
+    // Mode shape 1 − cos(pi x / 2L): a quarter wave, wavelength 4L = 40.
+    let w = b.modes[0].wavelength.expect("wavelength");
+    assert!((w / 40.0 - 1.0).abs() < 0.05, "wavelength {w}");
+
+    // The perfect column's path crosses the bifurcation in one step.
+    let r = run_loaded(&sc, None, false).expect("run");
+    assert_eq!(r.stop.reason, "end");
+    let bif: Vec<_> = r
+        .events
+        .iter()
+        .filter(|e| e.kind == "bifurcation")
+        .collect();
+    assert_eq!(bif.len(), 1, "{:?}", r.events);
+    let e = bif[0];
+    println!(
+        "| located on the path | {:.9} | 1 | {:.2e} | ({} factorizations, step {}, pivots {:?})",
+        e.lambda,
+        e.lambda - 1.0,
+        e.factorizations,
+        e.step,
+        e.negative_pivots
+    );
+    assert!((e.lambda - 1.0).abs() <= 5e-3, "{}", e.lambda);
+    assert_eq!(e.negative_pivots, Some((0, 1)));
+    assert!((e.wavelength.unwrap() / 40.0 - 1.0).abs() < 0.05);
+
+    // Location accuracy, independently of the locator: linearized buckling
+    // (subspace iteration on the pencil) about the path state just before
+    // the located point, lambda_b = 0.999 lambda*, predicts
+    // lambda_b + mu_1; its linearization error is O((lambda* − lambda_b)²)
+    // times the prebuckling nonlinearity (strains ~ 2e-5), far below 1e-6.
+    let lb = 0.999 * e.lambda;
+    let near = buckle(&sc, lb, 1, None).expect("buckle near");
+    let predicted = lb + near.modes[0].mu;
+    let rel = (predicted - e.lambda).abs() / e.lambda;
+    println!(
+        "location: path {:.12}, buckle about {lb:.9}: {predicted:.12}, relative difference {rel:.2e} (target 1e-6)",
+        e.lambda
+    );
+    assert!(rel <= 1e-6, "{rel:e}");
+}
+
+#[test]
+fn post_buckled_column_follows_the_elastica_to_120_degrees() {
+    let sc = scene("euler-column-postbuckling");
+    let r = run_loaded(&sc, None, false).expect("run");
+    assert_eq!(r.stop.reason, "end");
+    let col = |n: &str| r.columns.iter().position(|c| c == n).unwrap();
+    let (wx, wz) = (col("wx_tip"), col("wz_tip"));
+    println!("| P/P_cr | alpha (deg) | elastica | relative error |\n|---|---|---|---|");
+    let mut worst: f64 = 0.0;
+    let mut alpha_max: f64 = 0.0;
+    for row in &r.history {
+        let alpha = row[wx].abs().atan2(1.0 + row[wz]);
+        // Below 10°, the imperfection (not the branch) governs.
+        if alpha < 10f64.to_radians() {
+            continue;
+        }
+        let want = elastica(alpha);
+        let err = row[0] / want - 1.0;
+        println!(
+            "| {:.3} | {:.2} | {want:.6} | {err:+.2e} |",
+            row[0],
+            alpha.to_degrees()
+        );
+        worst = worst.max(err.abs());
+        alpha_max = alpha_max.max(alpha);
+    }
+    println!(
+        "worst {worst:.2e} up to alpha = {:.1}°",
+        alpha_max.to_degrees()
+    );
+    assert!(
+        alpha_max.to_degrees() >= 120.0,
+        "{}",
+        alpha_max.to_degrees()
+    );
+    assert!(worst <= 5e-3, "{worst:e}");
+}
+
+#[test]
+fn simply_supported_plate_buckles_at_the_closed_form_stress() {
+    let sc = scene("plate-buckling");
+    let b = buckle(&sc, 0.0, 2, None).expect("buckle");
+    print!("{}", anm::study::buckle::table(&b));
+    let mu = b.modes[0].mu;
+    println!(
+        "plate 16 x 16: sigma_cr / closed form = {mu:.6} (error {:.2e}, tolerance 1e-2)",
+        mu - 1.0
+    );
+    assert!((mu - 1.0).abs() <= 1e-2, "{mu}");
+    // One half-wave each way: wavelength 2a.
+    let h = b.modes[0].half_waves.unwrap();
+    assert!((h - 1.0).abs() < 0.05, "half-waves {h}");
+    // The second mode, two half-waves along x: k = (2 + 1/2)² = 6.25.
+    assert!(
+        (b.modes[1].mu / (6.25 / 4.0) - 1.0).abs() <= 3e-2,
+        "{}",
+        b.modes[1].mu
+    );
+}
