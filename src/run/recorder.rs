@@ -70,7 +70,9 @@ pub struct StepRow {
 }
 
 /// A critical point of the path as written to summary.json (`events`) and
-/// steps.csv (columns `event*`, several events of one row joined by `;`).
+/// events.csv; steps.csv counts them in its column `events` on the row of
+/// the step at whose end they were found (steps.csv stays all-numeric for
+/// its readers).
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct EventRecord {
     /// `bifurcation`, `limit_point` or `geometric`
@@ -97,7 +99,7 @@ pub struct EventRecord {
     pub wave_direction: Option<String>,
 }
 
-const STEP_COLUMNS: [&str; 14] = [
+const STEP_COLUMNS: [&str; 11] = [
     "step",
     "lambda_start",
     "lambda_end",
@@ -108,10 +110,7 @@ const STEP_COLUMNS: [&str; 14] = [
     "factorizations",
     "solves",
     "negative_pivots",
-    "event",
-    "event_lambda",
-    "event_step",
-    "event_mode",
+    "events",
 ];
 
 /// What the recorder keeps between steps: written into the checkpoint. The
@@ -135,6 +134,9 @@ pub struct RecorderState {
     /// Critical points found so far.
     #[serde(default)]
     pub events: Vec<EventRecord>,
+    /// lambda of the bifurcation where a secondary-branch run left the path.
+    #[serde(default)]
+    pub switched_at: Option<f64>,
 }
 
 pub struct Recorder<'s> {
@@ -328,10 +330,7 @@ impl<'s> Recorder<'s> {
                 r.factorizations.to_string(),
                 r.solves.to_string(),
                 r.negative_pivots.map(|k| k.to_string()).unwrap_or_default(),
-                join(&r.events, |e| e.kind.clone()),
-                join(&r.events, |e| format!("{:.17e}", e.lambda)),
-                join(&r.events, |e| e.step.to_string()),
-                join(&r.events, |e| e.mode.clone().unwrap_or_default()),
+                r.events.len().to_string(),
             ];
             w.write_record(&rec)
                 .and_then(|_| w.flush().map_err(csv::Error::from))
@@ -379,6 +378,56 @@ impl<'s> Recorder<'s> {
         Ok(())
     }
 
+    /// Records an event and rewrites events.csv (kind, lambda, step, a,
+    /// negative pivots before and after, bracket, kappa, factorizations,
+    /// half-waves, wavelength, direction, mode file).
+    pub fn event(&mut self, e: EventRecord) -> Result<()> {
+        self.state.events.push(e);
+        let Some(d) = &self.dir else { return Ok(()) };
+        let path = d.join("events.csv");
+        let mut w = csv::Writer::from_path(&path).map_err(csv_err(&path))?;
+        w.write_record([
+            "kind",
+            "lambda",
+            "step",
+            "a",
+            "negative_pivots_before",
+            "negative_pivots_after",
+            "bracket",
+            "kappa",
+            "factorizations",
+            "half_waves",
+            "wavelength",
+            "wave_direction",
+            "mode",
+        ])
+        .map_err(csv_err(&path))?;
+        let opt = |x: Option<f64>| x.map(|v| format!("{v:.9e}")).unwrap_or_default();
+        for e in &self.state.events {
+            w.write_record([
+                e.kind.clone(),
+                format!("{:.17e}", e.lambda),
+                e.step.to_string(),
+                format!("{:.9e}", e.a),
+                e.negative_pivots
+                    .map(|p| p.0.to_string())
+                    .unwrap_or_default(),
+                e.negative_pivots
+                    .map(|p| p.1.to_string())
+                    .unwrap_or_default(),
+                format!("{:.3e}", e.bracket),
+                opt(e.kappa.is_finite().then_some(e.kappa)),
+                e.factorizations.to_string(),
+                opt(e.half_waves),
+                opt(e.wavelength),
+                e.wave_direction.clone().unwrap_or_default(),
+                e.mode.clone().unwrap_or_default(),
+            ])
+            .map_err(csv_err(&path))?;
+        }
+        w.flush().map_err(io_err(&path))
+    }
+
     /// Writes the checkpoint (atomically: a temporary file renamed).
     pub fn checkpoint<T: Serialize>(&self, value: &T) -> Result<()> {
         let Some(d) = &self.dir else { return Ok(()) };
@@ -390,11 +439,6 @@ impl<'s> Recorder<'s> {
         let path = d.join("checkpoint.json");
         std::fs::rename(&tmp, &path).map_err(io_err(&path))
     }
-}
-
-/// One steps.csv cell for the events of a row: their values joined by `;`.
-fn join(events: &[EventRecord], f: impl Fn(&EventRecord) -> String) -> String {
-    events.iter().map(f).collect::<Vec<_>>().join(";")
 }
 
 /// The mid-surface fields at a state.

@@ -16,7 +16,7 @@ use crate::linalg::LinearSolver;
 use crate::output::plot::{Curve, Panel, draw};
 use crate::output::vtk::{cylinder_surface, write_pvd, write_vtu};
 use crate::output::{Stop, write_csv, write_json};
-use crate::scene::shell::{Method, ShellScene, load};
+use crate::scene::shell::{Branch, Method, ShellScene, load};
 use crate::series::bifurcation::{self, Event};
 use crate::series::correct::Metric;
 use crate::series::path::{Checkpoint, Path as AnmPath};
@@ -66,6 +66,10 @@ pub struct RunReport {
     /// Critical points of the path (limit points, bifurcations, geometric
     /// series), in path order.
     pub events: Vec<EventRecord>,
+    /// With solver.branch = "secondary": lambda of the bifurcation where
+    /// the path left for the bifurcated branch.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub switched_at: Option<f64>,
     /// history.csv: column names (lambda, then the probes).
     pub columns: Vec<String>,
     #[serde(skip)]
@@ -324,6 +328,10 @@ fn run_inner(
             // The step before the current one: its end inertia is the
             // current step's start inertia (critical points, DESIGN §8).
             let mut pending: Option<PathStep> = None;
+            let secondary = match scene.branch {
+                Branch::Secondary { direction } => Some(direction),
+                Branch::Primary => None,
+            };
             let mut event_lu = LinearSolver::new(cfg.linear);
             let locate = bifurcation::Settings {
                 lambda_scale: cfg.lambda_scale,
@@ -350,7 +358,25 @@ fn run_inner(
                     rec.state.active_sum += model.pairs.len();
                 }
                 let arc0 = rec.state.arclength;
-                for (a, g, u) in grid_points(&rec, &step)? {
+                // solver.branch = "secondary", before the switch: this
+                // step's critical points now (one more factorization per
+                // step), so that the path leaves at the first bifurcation.
+                let mut events = vec![];
+                let mut switch: Option<Event> = None;
+                if secondary.is_some() && rec.state.switched_at.is_none() {
+                    let n1 = end_inertia(model, &mut event_lu, &step.u_end, step.lambda_end)?;
+                    events = critical_points(model, &mut event_lu, &step, n1, None, &locate)?;
+                    switch = events
+                        .iter()
+                        .find(|e| e.kind == bifurcation::Kind::Bifurcation)
+                        .cloned();
+                }
+                let a_max = switch.as_ref().map_or(f64::INFINITY, |e| e.a);
+                let points: Vec<_> = grid_points(&rec, &step)?
+                    .into_iter()
+                    .filter(|p| p.0 <= a_max)
+                    .collect();
+                for (a, g, u) in points {
                     let before = grid_stats.factorizations;
                     let (u, iterations) = correct::correct_at_lambda(
                         model,
@@ -378,8 +404,7 @@ fn run_inner(
                         },
                     )?;
                 }
-                rec.state.arclength = arc0 + step.length;
-                let mut events = vec![];
+                rec.state.arclength = arc0 + step.length.min(a_max);
                 if let Some(prev) = pending.take() {
                     events.extend(critical_points(
                         model,
@@ -393,7 +418,9 @@ fn run_inner(
                 if let Some(g) = step.geometric {
                     events.push(bifurcation::geometric(&step, g.distance));
                 }
-                if path_at_end(&step, &cfg) {
+                if secondary.is_some() && rec.state.switched_at.is_none() {
+                    // Found above.
+                } else if path_at_end(&step, &cfg) {
                     let n1 = end_inertia(model, &mut event_lu, &step.u_end, step.lambda_end)?;
                     events.extend(critical_points(
                         model,
@@ -441,6 +468,21 @@ fn run_inner(
                     recorder: &rec.state,
                 })?;
                 show(step.lambda_end, &stats, "");
+                if let (Some(e), Some(direction)) = (switch, secondary) {
+                    let model: &mut ShellModel = path.problem();
+                    let (u, lambda, dir) =
+                        secondary_start(model, &step, &e, direction, &cfg, &metric, &mut event_lu)?;
+                    rec.state.switched_at = Some(e.lambda);
+                    let cp = Checkpoint {
+                        index: step.index + 1,
+                        u,
+                        lambda,
+                        prev_dir: Some((dir, 0.0)),
+                        stats: path.stats().clone(),
+                    };
+                    let model = path.into_problem();
+                    path = AnmPath::resume(model, cp, cfg.clone());
+                }
             };
             // A path stopped before its end: the last step's critical
             // points against the tangent at its end (summary.json only).
@@ -644,6 +686,7 @@ fn run_inner(
         far_nodes_skipped: far_skipped,
         resumed_at_step,
         events: rec.state.events.clone(),
+        switched_at: rec.state.switched_at,
         columns: rec.columns.clone(),
         history: rec.state.history.clone(),
         snapshots: rec.state.snapshots.clone(),
@@ -660,6 +703,76 @@ fn run_inner(
         }
     }
     Ok(report)
+}
+
+/// Mode amplitude of the first point on the secondary branch: its largest
+/// displacement is this fraction of the model's length scale.
+const BRANCH_OFFSET: f64 = 1e-3;
+
+/// The first point of the secondary branch at the bifurcation `e` of
+/// `step` (docs/bifurcation.md): from the located point (U_c, lambda_c)
+/// moved along the mode phi, U_c + delta phi (largest displacement
+/// BRANCH_OFFSET × length scale, sign `direction` of the mode whose
+/// largest displacement is positive), Newton-corrected on the hyperplane
+/// <U − U_c − delta phi, phi>~ = 0 (fixed mode amplitude, lambda free),
+/// which the primary path leaves and the bifurcated branch crosses.
+/// Returns the point and the direction (phi, 0) that orients the next step.
+fn secondary_start(
+    model: &mut ShellModel,
+    step: &PathStep,
+    e: &Event,
+    direction: f64,
+    cfg: &crate::series::ContinuationConfig,
+    metric: &Metric,
+    lu: &mut LinearSolver,
+) -> Result<(Vec<f64>, f64, Vec<f64>)> {
+    let (uc, lc) = step.eval(e.a);
+    let full = model.expand(&e.mode, 0.0);
+    let n = model.n_nodes();
+    let mut big = 0.0f64;
+    for i in 0..n {
+        for k in 0..3 {
+            let v = full[crate::fe::dof::index(i, k)];
+            if v.abs() > big.abs() {
+                big = v;
+            }
+        }
+    }
+    if big == 0.0 {
+        return Err(Error::SingularMatrix {
+            step: step.index,
+            param: "lambda",
+            at: e.lambda,
+            detail: "the bifurcation mode has no displacement: no branch to switch to".into(),
+        });
+    }
+    let delta = direction * BRANCH_OFFSET * model.length_scale / big;
+    let phi: Vec<f64> = e.mode.iter().map(|v| delta * v).collect();
+    let start: Vec<f64> = uc.iter().zip(&phi).map(|(u, p)| u + p).collect();
+    let mut stats = Stats::default();
+    let settings = correct::Settings {
+        tol: cfg.residual_tol,
+        max_iter: 30,
+        jacobian: correct::Jacobian::Fresh,
+        max_residual: f64::INFINITY,
+        step: step.index,
+    };
+    let constraint = correct::Constraint::Arclength {
+        t_u: &phi,
+        t_lambda: 0.0,
+        reference: None,
+    };
+    let end = correct::correct(
+        model,
+        start,
+        lc,
+        &constraint,
+        &settings,
+        metric,
+        lu,
+        &mut stats,
+    )?;
+    Ok((end.u, end.lambda, phi))
 }
 
 /// Whether the step reached the path's target (it is the last one).
@@ -742,7 +855,7 @@ fn record_event(rec: &mut Recorder, model: &ShellModel, e: Event) -> Result<Even
         half_waves: wave.map(|w| w.half_waves),
         wave_direction: wave.map(|w| w.direction.to_string()),
     };
-    rec.state.events.push(r.clone());
+    rec.event(r.clone())?;
     Ok(r)
 }
 
