@@ -98,11 +98,10 @@ fn euler_column_buckle_and_path_bifurcation_match_the_closed_form() {
     assert!(rel <= 1e-6, "{rel:e}");
 }
 
-#[test]
-fn post_buckled_column_follows_the_elastica_to_120_degrees() {
-    let sc = scene("euler-column-postbuckling");
-    let r = run_loaded(&sc, None, false).expect("run");
-    assert_eq!(r.stop.reason, "end");
+/// Worst relative difference of P/P_cr from the elastica over the history
+/// rows with alpha >= 10° (below, an imperfection governs), and the largest
+/// alpha; prints the table.
+fn elastica_error(r: &anm::run::RunReport) -> (f64, f64) {
     let col = |n: &str| r.columns.iter().position(|c| c == n).unwrap();
     let (wx, wz) = (col("wx_tip"), col("wz_tip"));
     println!("| P/P_cr | alpha (deg) | elastica | relative error |\n|---|---|---|---|");
@@ -110,7 +109,6 @@ fn post_buckled_column_follows_the_elastica_to_120_degrees() {
     let mut alpha_max: f64 = 0.0;
     for row in &r.history {
         let alpha = row[wx].abs().atan2(1.0 + row[wz]);
-        // Below 10°, the imperfection (not the branch) governs.
         if alpha < 10f64.to_radians() {
             continue;
         }
@@ -124,16 +122,44 @@ fn post_buckled_column_follows_the_elastica_to_120_degrees() {
         worst = worst.max(err.abs());
         alpha_max = alpha_max.max(alpha);
     }
-    println!(
-        "worst {worst:.2e} up to alpha = {:.1}°",
-        alpha_max.to_degrees()
-    );
-    assert!(
-        alpha_max.to_degrees() >= 120.0,
-        "{}",
-        alpha_max.to_degrees()
-    );
+    println!("worst {worst:.2e} up to alpha = {:.1}°", alpha_max.to_degrees());
+    (worst, alpha_max.to_degrees())
+}
+
+#[test]
+fn post_buckled_column_follows_the_elastica_to_120_degrees() {
+    // With a lateral imperfection (1e-3 P): the path itself goes round the
+    // bifurcation.
+    let r = run_loaded(&scene("euler-column-postbuckling"), None, false).expect("run");
+    assert_eq!(r.stop.reason, "end");
+    let (worst, alpha_max) = elastica_error(&r);
+    assert!(alpha_max >= 120.0, "{alpha_max}");
     assert!(worst <= 5e-3, "{worst:e}");
+}
+
+#[test]
+fn perfect_column_switches_to_the_bifurcated_branch_in_either_direction() {
+    let mut sc = scene("euler-column-secondary");
+    let r = run_loaded(&sc, None, false).expect("run");
+    assert_eq!(r.stop.reason, "end");
+    let at = r.switched_at.expect("switched");
+    println!("left the primary path at lambda = {at:.9}");
+    assert!((at - 1.0).abs() <= 5e-3, "{at}");
+    // The post-buckled branch is stable: no further event.
+    assert_eq!(r.events.len(), 1, "{:?}", r.events);
+    let (worst, alpha_max) = elastica_error(&r);
+    assert!(alpha_max >= 120.0, "{alpha_max}");
+    assert!(worst <= 5e-3, "{worst:e}");
+    // The other direction: the mirror image (uz of the tip reversed), same
+    // load-rotation curve.
+    sc.branch = anm::scene::shell::Branch::Secondary { direction: -1.0 };
+    let m = run_loaded(&sc, None, false).expect("run, direction -1");
+    assert_eq!(m.stop.reason, "end");
+    let (uz, uz_m) = (r.end["uz_tip"], m.end["uz_tip"]);
+    println!("tip uz at lambda = 1.9: direction +1 {uz:.6}, direction -1 {uz_m:.6}");
+    assert!(uz.signum() != uz_m.signum() && ((uz + uz_m) / uz).abs() < 1e-6);
+    let (worst_m, _) = elastica_error(&m);
+    assert!(worst_m <= 5e-3, "{worst_m:e}");
 }
 
 #[test]
