@@ -122,7 +122,10 @@ fn elastica_error(r: &anm::run::RunReport) -> (f64, f64) {
         worst = worst.max(err.abs());
         alpha_max = alpha_max.max(alpha);
     }
-    println!("worst {worst:.2e} up to alpha = {:.1}°", alpha_max.to_degrees());
+    println!(
+        "worst {worst:.2e} up to alpha = {:.1}°",
+        alpha_max.to_degrees()
+    );
     (worst, alpha_max.to_degrees())
 }
 
@@ -182,4 +185,62 @@ fn simply_supported_plate_buckles_at_the_closed_form_stress() {
         "{}",
         b.modes[1].mu
     );
+}
+
+#[test]
+fn arch_limit_points_are_told_apart_and_located_where_lambda_turns() {
+    // The shallow clamped arch passes a limit point, turns back and snaps
+    // (two limit points). Located by the tangent's eigenvalue crossing
+    // zero, each must sit where the same series has dlambda/da = 0 (the
+    // other characterization of a limit point; bisection on the series'
+    // polynomial, no tangent involved).
+    use anm::series::bifurcation::{self, Kind};
+    let sc = scene("clamped-arch-snap");
+    let r = run_loaded(&sc, None, false).expect("run");
+    let kinds: Vec<&str> = r.events.iter().map(|e| e.kind.as_str()).collect();
+    assert_eq!(kinds, ["limit_point", "limit_point"], "{:?}", r.events);
+    let mut model = anm::run::build::build_model(&sc).expect("model");
+    model.length_scale = sc.length_scale;
+    let mut cfg = sc.solver.clone();
+    cfg.lambda_scale = cfg.lambda_end.abs();
+    let settings = bifurcation::Settings {
+        lambda_scale: cfg.lambda_scale,
+        ..Default::default()
+    };
+    let n = anm::series::ContinuationProblem::ndof(&model);
+    let mut steps = vec![];
+    {
+        let mut path = anm::series::Path::new(&mut model, vec![0.0; n], 0.0, cfg.clone());
+        while let Ok(s) = path.step() {
+            steps.push(s);
+        }
+    }
+    let mut lu = anm::linalg::LinearSolver::default();
+    println!(
+        "| step | lambda located (eigenvalue) | lambda at dlambda/da = 0 | relative difference | a difference / step length |\n|---|---|---|---|---|"
+    );
+    let mut found = 0;
+    for w in steps.windows(2) {
+        let (n0, n1) = (w[0].negative_pivots.unwrap(), w[1].negative_pivots.unwrap());
+        if n0 == n1 {
+            continue;
+        }
+        let located = bifurcation::locate(&mut model, &w[0], n0, n1, &mut lu, &settings).unwrap();
+        assert_eq!(located.len(), 1);
+        assert_eq!(located[0].kind, Kind::LimitPoint);
+        let turn = bifurcation::limit_point(&w[0]);
+        let rel = (located[0].lambda - turn.lambda).abs() / turn.lambda.abs();
+        // lambda is stationary there: the path parameter is the sharper test.
+        let da = (located[0].a - turn.a).abs() / w[0].length;
+        println!(
+            "| {} | {:.15} | {:.15} | {rel:.1e} | {da:.1e} |",
+            w[0].index + 1,
+            located[0].lambda,
+            turn.lambda
+        );
+        assert!(rel <= 1e-6, "{rel:e}");
+        assert!(da <= 1e-4, "{da:e}");
+        found += 1;
+    }
+    assert_eq!(found, 2);
 }
