@@ -256,6 +256,44 @@ pub fn smallest_eigenvalue(
     Ok((kappa, x, max_iter))
 }
 
+/// The real eigenvalue nearest zero of a general (non-symmetric) A and its
+/// unit right eigenvector, by inverse iteration: y = A⁻¹ x, kappa =
+/// 1 / (x · y) for |x| = 1 (exact once x is an eigenvector), until kappa
+/// changes by less than `tol` relative. The eigenvector's sign follows
+/// `start`. A complex pair nearest zero does not converge: an error.
+pub fn nearest_real_eigenvalue(
+    a: &Factorization,
+    n: usize,
+    start: Option<&[f64]>,
+    tol: f64,
+    max_iter: usize,
+) -> Result<(f64, Vec<f64>, usize), String> {
+    let mut x = match start {
+        Some(s) if s.len() == n && norm(s) > 0.0 => s.to_vec(),
+        _ => start_vectors(n, 1).pop().unwrap_or_default(),
+    };
+    let s = norm(&x);
+    x.iter_mut().for_each(|v| *v /= s);
+    let reference = x.clone();
+    let mut kappa = f64::NAN;
+    for it in 1..=max_iter {
+        let y = a.solve(&x);
+        if y.iter().any(|v| !v.is_finite()) {
+            return Err("non-finite solve in inverse iteration (singular matrix)".into());
+        }
+        let next = 1.0 / dot(&x, &y);
+        let s = norm(&y) * dot(&y, &reference).signum();
+        x = y.iter().map(|v| v / s).collect();
+        if (next - kappa).abs() <= tol * next.abs() {
+            return Ok((next, x, it));
+        }
+        kappa = next;
+    }
+    Err(format!(
+        "inverse iteration did not converge in {max_iter} solves (complex eigenvalues nearest zero?)"
+    ))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

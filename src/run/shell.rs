@@ -818,12 +818,21 @@ fn critical_points(
     match (step.negative_pivots, n1) {
         (Some(n0), Some(n1)) if n0 != n1 => bifurcation::locate(model, step, n0, n1, lu, settings),
         (Some(_), Some(_)) => Ok(vec![]),
-        _ => Ok(match next_l1 {
-            Some(l1) if l1.signum() != step.lambda[1].signum() => {
-                vec![bifurcation::limit_point(step)]
+        _ => {
+            // No inertia: a geometric series flags the step; the tangent's
+            // real eigenvalue nearest zero locates the point.
+            if step.geometric.is_some()
+                && let Some(e) = bifurcation::locate_unsymmetric(model, step, lu, settings)?
+            {
+                return Ok(vec![e]);
             }
-            _ => vec![],
-        }),
+            Ok(match next_l1 {
+                Some(l1) if l1.signum() != step.lambda[1].signum() => {
+                    vec![bifurcation::limit_point(step)]
+                }
+                _ => vec![],
+            })
+        }
     }
 }
 

@@ -287,6 +287,91 @@ pub fn locate<P: ContinuationProblem + ?Sized>(
     Ok(events)
 }
 
+/// A critical point located without inertia (non-symmetric tangent), in a
+/// step whose series passed the geometric-series test: the real eigenvalue
+/// of Kt nearest zero ([`eigen::nearest_real_eigenvalue`], started from
+/// the geometric mode U_N) must change sign between a = 0 and the step's
+/// length; then the Illinois iteration on it as in [`locate`] (no inertia
+/// bracket: the sign of the eigenvalue is the bracket). None when it does
+/// not change sign on the step.
+pub fn locate_unsymmetric<P: ContinuationProblem + ?Sized>(
+    problem: &mut P,
+    step: &PathStep,
+    lu: &mut LinearSolver,
+    settings: &Settings,
+) -> Result<Option<Event>> {
+    let n = step.u.len() - 1;
+    let start = step.u[n].clone();
+    let mut eval = |a: f64, start: &[f64]| -> Result<(f64, f64, Vec<f64>)> {
+        let (u, lambda) = step.eval(a);
+        let (k, _) = problem.tangent(&u, lambda)?;
+        let fail = |detail: String| Error::SingularMatrix {
+            step: step.index,
+            param: "lambda",
+            at: lambda,
+            detail: format!("locating a critical point: {detail}"),
+        };
+        let f = lu.factorize(&k).map_err(fail)?;
+        let (kappa, mode, _) =
+            eigen::nearest_real_eigenvalue(&f, k.n, Some(start), 1e-12, 400).map_err(fail)?;
+        Ok((lambda, kappa, mode))
+    };
+    let (mut a_lo, mut a_hi) = (0.0, step.length);
+    let (mut l_lo, mut k_lo, m_lo) = eval(a_lo, &start)?;
+    let (mut l_hi, mut k_hi, mut mode) = eval(a_hi, &m_lo)?;
+    if k_lo.signum() == k_hi.signum() {
+        return Ok(None);
+    }
+    let (mut f_lo, mut f_hi) = (k_lo, k_hi);
+    let mut side = 0i8;
+    let mut used = 2;
+    let mut a = 0.5 * (a_lo + a_hi);
+    let tol = settings.tol * l_lo.abs().max(settings.lambda_scale);
+    while (l_hi - l_lo).abs() > tol && used < settings.max_evaluations {
+        let w = a_hi - a_lo;
+        a = ((a_lo * f_hi - a_hi * f_lo) / (f_hi - f_lo)).clamp(a_lo + 1e-3 * w, a_hi - 1e-3 * w);
+        let (l, k, m) = eval(a, &mode)?;
+        used += 1;
+        mode = m;
+        if k == 0.0 {
+            break;
+        }
+        if k.signum() == k_lo.signum() {
+            (a_lo, l_lo, k_lo, f_lo) = (a, l, k, k);
+            if side == -1 {
+                f_hi *= 0.5;
+            }
+            side = -1;
+        } else {
+            (a_hi, l_hi, k_hi, f_hi) = (a, l, k, k);
+            if side == 1 {
+                f_lo *= 0.5;
+            }
+            side = 1;
+        }
+    }
+    let (_, lambda) = step.eval(a);
+    let rate_scale = (0..=16)
+        .map(|i| lambda_rate(step, step.length * i as f64 / 16.0).abs())
+        .fold(0.0f64, f64::max);
+    let kind = if lambda_rate(step, a).abs() < 1e-2 * rate_scale {
+        Kind::LimitPoint
+    } else {
+        Kind::Bifurcation
+    };
+    Ok(Some(Event {
+        kind,
+        lambda,
+        step: step.index,
+        a,
+        negative_pivots: None,
+        bracket: (l_hi - l_lo).abs(),
+        kappa: if k_lo.abs() < k_hi.abs() { k_lo } else { k_hi },
+        factorizations: used,
+        mode,
+    }))
+}
+
 /// A limit point without inertia (non-symmetric tangent): lambda_1 changed
 /// sign between this step and the next; the root of dlambda/da on the
 /// step's series (bisection on 64 samples), or the step end.

@@ -244,3 +244,41 @@ fn arch_limit_points_are_told_apart_and_located_where_lambda_turns() {
     }
     assert_eq!(found, 2);
 }
+
+#[test]
+fn cantilever_under_end_moment_bifurcates_out_of_plane_and_follows_the_branch() {
+    // Issue 14, 5d. No closed form for this point: its two independent
+    // estimates must agree, the Cochelin–Medale geometric series (the
+    // step's series with its geometric part removed, at a = alpha_1) and
+    // the root of the tangent's real eigenvalue nearest zero on the series.
+    let mut sc = scene("cantilever-moment-bifurcation");
+    let r = run_loaded(&sc, None, false).expect("run");
+    assert_eq!(r.stop.reason, "end");
+    let find = |k: &str| r.events.iter().find(|e| e.kind == k).cloned();
+    let g = find("geometric").expect("geometric event");
+    let b = find("bifurcation").expect("located bifurcation");
+    let rel = (g.lambda - b.lambda).abs() / b.lambda;
+    println!(
+        "out-of-plane bifurcation: located lambda = M / M_max = {:.12} (bracket {:.1e}, {} factorizations), geometric-series estimate {:.12}, relative difference {rel:.1e}",
+        b.lambda, b.bracket, b.factorizations, g.lambda
+    );
+    assert!((0.78..0.80).contains(&b.lambda), "{}", b.lambda);
+    assert!(rel <= 1e-6, "{rel:e}");
+    assert_eq!(r.switched_at, Some(b.lambda));
+    // The followed branch is out of plane; the tip of the planar (primary)
+    // solution would have uy = 0 and be back at the clamp (ux = -L).
+    let uy = r.end["uy_tip"];
+    println!(
+        "secondary branch at lambda = 1: tip uy = {uy:.6}, ux = {:.6}, uz = {:.6}",
+        r.end["ux_tip"], r.end["uz_tip"]
+    );
+    assert!(uy.abs() > 0.1, "{uy}");
+    sc.branch = anm::scene::shell::Branch::Primary;
+    let p = run_loaded(&sc, None, false).expect("primary run");
+    println!(
+        "primary path at lambda = 1: tip uy = {:.2e}, ux = {:.6} (closed circle: ux = -10)",
+        p.end["uy_tip"], p.end["ux_tip"]
+    );
+    assert!(p.end["uy_tip"].abs() < 1e-6);
+    assert!((p.end["ux_tip"] + 10.0).abs() < 0.05);
+}
