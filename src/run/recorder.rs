@@ -87,8 +87,9 @@ pub struct EventRecord {
     pub negative_pivots: Option<(usize, usize)>,
     /// Final bracket width in lambda (0: estimate without bracket).
     pub bracket: f64,
-    /// Smallest eigenvalue of the tangent at the point (the test function).
-    pub kappa: f64,
+    /// Eigenvalue of the tangent nearest zero at the point (the test
+    /// function; none for an estimate without location).
+    pub kappa: Option<f64>,
     /// Tangent factorizations spent locating it.
     pub factorizations: usize,
     /// The mode's VTK file (in the output folder), if written.
@@ -416,7 +417,7 @@ impl<'s> Recorder<'s> {
                     .map(|p| p.1.to_string())
                     .unwrap_or_default(),
                 format!("{:.3e}", e.bracket),
-                opt(e.kappa.is_finite().then_some(e.kappa)),
+                opt(e.kappa),
                 e.factorizations.to_string(),
                 opt(e.half_waves),
                 opt(e.wavelength),

@@ -66,6 +66,9 @@ pub struct RunReport {
     /// Critical points of the path (limit points, bifurcations, geometric
     /// series), in path order.
     pub events: Vec<EventRecord>,
+    /// Tangent factorizations spent on critical points (inertia at the
+    /// path's end, location; not in `factorizations`).
+    pub event_factorizations: usize,
     /// With solver.branch = "secondary": lambda of the bifurcation where
     /// the path left for the bifurcated branch.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -318,6 +321,7 @@ fn run_inner(
     let mut grid_stats = Stats::default();
     let far_skipped = model.search_distance.is_finite() && !model.pairs.is_empty();
     let method_name;
+    let mut event_factorizations = 0;
     let (stop, stats, last): (PathStop, Stats, (Vec<f64>, f64)) = match &scene.method {
         Method::Anm => {
             method_name = "anm";
@@ -364,7 +368,10 @@ fn run_inner(
                 let mut events = vec![];
                 let mut switch: Option<Event> = None;
                 if secondary.is_some() && rec.state.switched_at.is_none() {
-                    let n1 = end_inertia(model, &mut event_lu, &step.u_end, step.lambda_end)?;
+                    let n1 = match step.negative_pivots {
+                        Some(_) => end_inertia(model, &mut event_lu, &step.u_end, step.lambda_end)?,
+                        None => None,
+                    };
                     events = critical_points(model, &mut event_lu, &step, n1, None, &locate)?;
                     switch = events
                         .iter()
@@ -421,7 +428,10 @@ fn run_inner(
                 if secondary.is_some() && rec.state.switched_at.is_none() {
                     // Found above.
                 } else if path_at_end(&step, &cfg) {
-                    let n1 = end_inertia(model, &mut event_lu, &step.u_end, step.lambda_end)?;
+                    let n1 = match step.negative_pivots {
+                        Some(_) => end_inertia(model, &mut event_lu, &step.u_end, step.lambda_end)?,
+                        None => None,
+                    };
                     events.extend(critical_points(
                         model,
                         &mut event_lu,
@@ -490,12 +500,17 @@ fn run_inner(
                 let (u, l) = path.state();
                 let (u, l) = (u.to_vec(), l);
                 let model: &mut ShellModel = path.problem();
-                let n1 = end_inertia(model, &mut event_lu, &u, l)?;
+                let n1 = match prev.negative_pivots {
+                    Some(_) => end_inertia(model, &mut event_lu, &u, l)?,
+                    None => None,
+                };
                 for e in critical_points(model, &mut event_lu, &prev, n1, None, &locate)? {
                     record_event(&mut rec, model, e)?;
                 }
             }
             let (u, l) = path.state();
+            let ls = event_lu.stats();
+            event_factorizations = ls.ldlt + ls.lblt + ls.lu + ls.mumps;
             (stop, path.stats().clone(), (u.to_vec(), l))
         }
         Method::Newton(ncfg) => {
@@ -687,6 +702,7 @@ fn run_inner(
         resumed_at_step,
         events: rec.state.events.clone(),
         switched_at: rec.state.switched_at,
+        event_factorizations,
         columns: rec.columns.clone(),
         history: rec.state.history.clone(),
         snapshots: rec.state.snapshots.clone(),
@@ -786,7 +802,9 @@ fn path_at_end(step: &PathStep, cfg: &crate::series::ContinuationConfig) -> bool
 }
 
 /// Negative pivots of the tangent at (u, lambda) (None when it is not
-/// symmetric): the inertia at the end of the last step.
+/// symmetric): the inertia at the end of the last step (called only when
+/// the step's start tangent had an inertia: one more factorization per
+/// run, or per step with solver.branch = "secondary" before the switch).
 fn end_inertia(
     model: &mut ShellModel,
     lu: &mut LinearSolver,
@@ -821,8 +839,10 @@ fn critical_points(
         _ => {
             // No inertia: a geometric series flags the step; the tangent's
             // real eigenvalue nearest zero locates the point.
+            // A failed location (e.g. a complex pair nearest zero) leaves
+            // the geometric estimate as the step's only event.
             if step.geometric.is_some()
-                && let Some(e) = bifurcation::locate_unsymmetric(model, step, lu, settings)?
+                && let Ok(Some(e)) = bifurcation::locate_unsymmetric(model, step, lu, settings)
             {
                 return Ok(vec![e]);
             }
@@ -857,7 +877,7 @@ fn record_event(rec: &mut Recorder, model: &ShellModel, e: Event) -> Result<Even
         a: e.a,
         negative_pivots: e.negative_pivots,
         bracket: e.bracket,
-        kappa: e.kappa,
+        kappa: e.kappa.is_finite().then_some(e.kappa),
         factorizations: e.factorizations,
         mode,
         wavelength: wave.map(|w| w.wavelength),
