@@ -282,3 +282,49 @@ fn cantilever_under_end_moment_bifurcates_out_of_plane_and_follows_the_branch() 
     assert!(p.end["uy_tip"].abs() < 1e-6);
     assert!((p.end["ux_tip"] + 10.0).abs() < 0.05);
 }
+
+#[test]
+fn bad_branch_keys_and_an_unstable_buckling_state_are_clear_errors() {
+    let base = std::fs::read_to_string(format!(
+        "{}/scenes/verification/euler-column.toml",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .unwrap();
+    let dir = std::env::temp_dir().join("anm-bifurcation-bad-input");
+    std::fs::create_dir_all(&dir).unwrap();
+    let cases = [
+        ("branch = \"tertiary\"", "solver.branch"),
+        ("branch_direction = -1.0", "solver.branch_direction"),
+        (
+            "branch = \"secondary\"\nbranch_direction = 2.0",
+            "solver.branch_direction",
+        ),
+        (
+            "branch = \"secondary\"\nmethod = \"newton\"",
+            "solver.branch",
+        ),
+    ];
+    for (k, (extra, key)) in cases.iter().enumerate() {
+        let text = base.replace("lambda_end = 2.0", &format!("lambda_end = 2.0\n{extra}"));
+        let text = if extra.contains("newton") {
+            text.replace("order = 20\neps = 1e-8\n", "")
+        } else {
+            text
+        };
+        let p = dir.join(format!("case{k}.toml"));
+        std::fs::write(&p, text).unwrap();
+        let e = load(&p)
+            .err()
+            .unwrap_or_else(|| panic!("{extra}: accepted"));
+        let msg = e.to_string();
+        println!("{extra:?}: {msg}");
+        assert!(msg.contains(key) && msg.contains("case"), "{msg}");
+    }
+    // Past the bifurcation the base state is unstable: refused, with why.
+    let e = buckle(&scene("euler-column"), 1.5, 1, None)
+        .err()
+        .expect("unstable base state");
+    let msg = e.to_string();
+    println!("{msg}");
+    assert!(msg.contains("negative pivot"), "{msg}");
+}
