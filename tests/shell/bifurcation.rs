@@ -321,9 +321,7 @@ fn bad_branch_keys_and_an_unstable_buckling_state_are_clear_errors() {
         assert!(msg.contains(key) && msg.contains("case"), "{msg}");
     }
     // Past the bifurcation the base state is unstable: refused, with why.
-    let e = buckle(&scene("euler-column"), 1.5, 1, None)
-        .err()
-        .expect("unstable base state");
+    let e = buckle(&scene("euler-column"), 1.5, 1, None).expect_err("unstable base state");
     let msg = e.to_string();
     println!("{msg}");
     assert!(msg.contains("negative pivot"), "{msg}");
