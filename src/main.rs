@@ -37,6 +37,22 @@ enum Command {
     },
     /// Read and validate a scene without solving it.
     Check { scene: PathBuf },
+    /// Linearized buckling of a shell scene (Abaqus *BUCKLE): the lowest
+    /// eigenvalues mu and modes of (K_0 + mu K_sigma) about the state at
+    /// --lambda (path followed by the ANM) or the initial state; the
+    /// eigenvalue table on stdout, with -o also buckle.csv, buckle.json and
+    /// one buckle_mode_K.vtu per mode.
+    Buckle {
+        scene: PathBuf,
+        /// lambda of the base state (0: the initial state).
+        #[arg(long, default_value_t = 0.0)]
+        lambda: f64,
+        /// Number of modes.
+        #[arg(long, default_value_t = 4)]
+        modes: usize,
+        #[arg(short, long, value_name = "DIR")]
+        out: Option<PathBuf>,
+    },
     /// Sweep regularization parameters (in parallel) and report how much they
     /// bend the key outputs and what they cost: the table on stdout; with -o,
     /// also audit.csv, audit.md, audit.svg.
@@ -641,6 +657,21 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
             } else {
                 ExitCode::SUCCESS
             })
+        }
+        Command::Buckle {
+            scene,
+            lambda,
+            modes,
+            out,
+        } => {
+            let sc = anm::scene::shell::load(&scene)?;
+            let report = anm::study::buckle::buckle(&sc, lambda, modes, out.as_deref())
+                .with_context(|| format!("buckling analysis of {}", scene.display()))?;
+            print!("{}", anm::study::buckle::table(&report));
+            if let Some(d) = out {
+                println!("outputs in {}", d.display());
+            }
+            Ok(ExitCode::SUCCESS)
         }
         Command::Run {
             scene,

@@ -9,6 +9,7 @@
 //! Systems of a few unknowns (the friction DAEs) use the dense [`DenseLu`].
 
 mod dense_lu;
+pub mod eigen;
 mod lu;
 pub mod matrix_market;
 #[cfg(feature = "mumps")]

@@ -2,6 +2,7 @@
 
 #[cfg(feature = "hdf5")]
 pub mod hdf5;
+pub mod mode;
 pub mod plot;
 pub mod vtk;
 

@@ -64,9 +64,43 @@ pub struct StepRow {
     pub solves: usize,
     /// Negative pivots of the step-start tangent (symmetric factorizations).
     pub negative_pivots: Option<usize>,
+    /// Critical points found at this step's end (in this step or the one
+    /// before: `EventRecord::step` says which).
+    pub events: Vec<EventRecord>,
 }
 
-const STEP_COLUMNS: [&str; 10] = [
+/// A critical point of the path as written to summary.json (`events`) and
+/// events.csv; steps.csv counts them in its column `events` on the row of
+/// the step at whose end they were found (steps.csv stays all-numeric for
+/// its readers).
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct EventRecord {
+    /// `bifurcation`, `limit_point` or `geometric`
+    /// ([`crate::series::bifurcation::Kind`]).
+    pub kind: String,
+    pub lambda: f64,
+    /// The steps.csv step whose series holds the point.
+    pub step: usize,
+    /// Path parameter on that step's series.
+    pub a: f64,
+    /// Negative pivots of the tangent before and after the point.
+    pub negative_pivots: Option<(usize, usize)>,
+    /// Final bracket width in lambda (0: estimate without bracket).
+    pub bracket: f64,
+    /// Eigenvalue of the tangent nearest zero at the point (the test
+    /// function; none for an estimate without location).
+    pub kappa: Option<f64>,
+    /// Tangent factorizations spent locating it.
+    pub factorizations: usize,
+    /// The mode's VTK file (in the output folder), if written.
+    pub mode: Option<String>,
+    /// The mode's dominant wavelength.
+    pub wavelength: Option<f64>,
+    pub half_waves: Option<f64>,
+    pub wave_direction: Option<String>,
+}
+
+const STEP_COLUMNS: [&str; 11] = [
     "step",
     "lambda_start",
     "lambda_end",
@@ -77,6 +111,7 @@ const STEP_COLUMNS: [&str; 10] = [
     "factorizations",
     "solves",
     "negative_pivots",
+    "events",
 ];
 
 /// What the recorder keeps between steps: written into the checkpoint. The
@@ -97,6 +132,12 @@ pub struct RecorderState {
     pub active_sum: usize,
     /// Wall time of the run before a resume.
     pub wall_s_before: f64,
+    /// Critical points found so far.
+    #[serde(default)]
+    pub events: Vec<EventRecord>,
+    /// lambda of the bifurcation where a secondary-branch run left the path.
+    #[serde(default)]
+    pub switched_at: Option<f64>,
 }
 
 pub struct Recorder<'s> {
@@ -290,6 +331,7 @@ impl<'s> Recorder<'s> {
                 r.factorizations.to_string(),
                 r.solves.to_string(),
                 r.negative_pivots.map(|k| k.to_string()).unwrap_or_default(),
+                r.events.len().to_string(),
             ];
             w.write_record(&rec)
                 .and_then(|_| w.flush().map_err(csv::Error::from))
@@ -335,6 +377,56 @@ impl<'s> Recorder<'s> {
         )?;
         self.state.pvd.push((lambda, 0, name.to_string()));
         Ok(())
+    }
+
+    /// Records an event and rewrites events.csv (kind, lambda, step, a,
+    /// negative pivots before and after, bracket, kappa, factorizations,
+    /// half-waves, wavelength, direction, mode file).
+    pub fn event(&mut self, e: EventRecord) -> Result<()> {
+        self.state.events.push(e);
+        let Some(d) = &self.dir else { return Ok(()) };
+        let path = d.join("events.csv");
+        let mut w = csv::Writer::from_path(&path).map_err(csv_err(&path))?;
+        w.write_record([
+            "kind",
+            "lambda",
+            "step",
+            "a",
+            "negative_pivots_before",
+            "negative_pivots_after",
+            "bracket",
+            "kappa",
+            "factorizations",
+            "half_waves",
+            "wavelength",
+            "wave_direction",
+            "mode",
+        ])
+        .map_err(csv_err(&path))?;
+        let opt = |x: Option<f64>| x.map(|v| format!("{v:.9e}")).unwrap_or_default();
+        for e in &self.state.events {
+            w.write_record([
+                e.kind.clone(),
+                format!("{:.17e}", e.lambda),
+                e.step.to_string(),
+                format!("{:.9e}", e.a),
+                e.negative_pivots
+                    .map(|p| p.0.to_string())
+                    .unwrap_or_default(),
+                e.negative_pivots
+                    .map(|p| p.1.to_string())
+                    .unwrap_or_default(),
+                format!("{:.3e}", e.bracket),
+                opt(e.kappa),
+                e.factorizations.to_string(),
+                opt(e.half_waves),
+                opt(e.wavelength),
+                e.wave_direction.clone().unwrap_or_default(),
+                e.mode.clone().unwrap_or_default(),
+            ])
+            .map_err(csv_err(&path))?;
+        }
+        w.flush().map_err(io_err(&path))
     }
 
     /// Writes the checkpoint (atomically: a temporary file renamed).

@@ -9,18 +9,19 @@ use super::build::build_model;
 use super::interrupt;
 use super::probe::State;
 pub use super::recorder::Snapshot;
-use super::recorder::{Recorder, RecorderState, StepRow};
+use super::recorder::{EventRecord, Recorder, RecorderState, StepRow};
 use crate::contact::{Obstacle, search};
 use crate::error::{Error, Result};
 use crate::linalg::LinearSolver;
 use crate::output::plot::{Curve, Panel, draw};
 use crate::output::vtk::{cylinder_surface, write_pvd, write_vtu};
 use crate::output::{Stop, write_csv, write_json};
-use crate::scene::shell::{Method, ShellScene, load};
+use crate::scene::shell::{Branch, Method, ShellScene, load};
+use crate::series::bifurcation::{self, Event};
 use crate::series::correct::Metric;
 use crate::series::path::{Checkpoint, Path as AnmPath};
 use crate::series::stop::Stop as PathStop;
-use crate::series::{ContinuationProblem, Stats, correct};
+use crate::series::{ContinuationProblem, PathStep, Stats, correct};
 use crate::shell::ShellModel;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -62,6 +63,16 @@ pub struct RunReport {
     /// Step at which this run was resumed, if it was.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub resumed_at_step: Option<usize>,
+    /// Critical points of the path (limit points, bifurcations, geometric
+    /// series), in path order.
+    pub events: Vec<EventRecord>,
+    /// Tangent factorizations spent on critical points (inertia at the
+    /// path's end, location; not in `factorizations`).
+    pub event_factorizations: usize,
+    /// With solver.branch = "secondary": lambda of the bifurcation where
+    /// the path left for the bifurcated branch.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub switched_at: Option<f64>,
     /// history.csv: column names (lambda, then the probes).
     pub columns: Vec<String>,
     #[serde(skip)]
@@ -310,12 +321,25 @@ fn run_inner(
     let mut grid_stats = Stats::default();
     let far_skipped = model.search_distance.is_finite() && !model.pairs.is_empty();
     let method_name;
+    let mut event_factorizations = 0;
     let (stop, stats, last): (PathStop, Stats, (Vec<f64>, f64)) = match &scene.method {
         Method::Anm => {
             method_name = "anm";
             let mut path = match path_cp {
                 Some(cp) => AnmPath::resume(&mut model, cp, cfg.clone()),
                 None => AnmPath::new(&mut model, zero.clone(), 0.0, cfg.clone()),
+            };
+            // The step before the current one: its end inertia is the
+            // current step's start inertia (critical points, DESIGN §8).
+            let mut pending: Option<PathStep> = None;
+            let secondary = match scene.branch {
+                Branch::Secondary { direction } => Some(direction),
+                Branch::Primary => None,
+            };
+            let mut event_lu = LinearSolver::new(cfg.linear);
+            let locate = bifurcation::Settings {
+                lambda_scale: cfg.lambda_scale,
+                ..Default::default()
             };
             let stop = loop {
                 if interrupt::requested() {
@@ -338,7 +362,28 @@ fn run_inner(
                     rec.state.active_sum += model.pairs.len();
                 }
                 let arc0 = rec.state.arclength;
-                for (a, g, u) in grid_points(&rec, &step)? {
+                // solver.branch = "secondary", before the switch: this
+                // step's critical points now (one more factorization per
+                // step), so that the path leaves at the first bifurcation.
+                let mut events = vec![];
+                let mut switch: Option<Event> = None;
+                if secondary.is_some() && rec.state.switched_at.is_none() {
+                    let n1 = match step.negative_pivots {
+                        Some(_) => end_inertia(model, &mut event_lu, &step.u_end, step.lambda_end)?,
+                        None => None,
+                    };
+                    events = critical_points(model, &mut event_lu, &step, n1, None, &locate)?;
+                    switch = events
+                        .iter()
+                        .find(|e| e.kind == bifurcation::Kind::Bifurcation)
+                        .cloned();
+                }
+                let a_max = switch.as_ref().map_or(f64::INFINITY, |e| e.a);
+                let points: Vec<_> = grid_points(&rec, &step)?
+                    .into_iter()
+                    .filter(|p| p.0 <= a_max)
+                    .collect();
+                for (a, g, u) in points {
                     let before = grid_stats.factorizations;
                     let (u, iterations) = correct::correct_at_lambda(
                         model,
@@ -366,7 +411,42 @@ fn run_inner(
                         },
                     )?;
                 }
-                rec.state.arclength = arc0 + step.length;
+                rec.state.arclength = arc0 + step.length.min(a_max);
+                if let Some(prev) = pending.take() {
+                    events.extend(critical_points(
+                        model,
+                        &mut event_lu,
+                        &prev,
+                        step.negative_pivots,
+                        Some(step.lambda[1]),
+                        &locate,
+                    )?);
+                }
+                if let Some(g) = step.geometric {
+                    events.push(bifurcation::geometric(&step, g.distance));
+                }
+                if secondary.is_some() && rec.state.switched_at.is_none() {
+                    // Found above.
+                } else if path_at_end(&step, &cfg) {
+                    let n1 = match step.negative_pivots {
+                        Some(_) => end_inertia(model, &mut event_lu, &step.u_end, step.lambda_end)?,
+                        None => None,
+                    };
+                    events.extend(critical_points(
+                        model,
+                        &mut event_lu,
+                        &step,
+                        n1,
+                        None,
+                        &locate,
+                    )?);
+                } else {
+                    pending = Some(step.clone());
+                }
+                let events: Vec<EventRecord> = events
+                    .into_iter()
+                    .map(|e| record_event(&mut rec, model, e))
+                    .collect::<Result<_>>()?;
                 rec.step(&StepRow {
                     step: step.index + 1,
                     lambda_start: step.lambda[0],
@@ -378,6 +458,7 @@ fn run_inner(
                     factorizations: stats.factorizations,
                     solves: stats.solves,
                     negative_pivots: step.negative_pivots,
+                    events,
                 })?;
                 let every = scene.output.vtk_every;
                 if every > 0 && (step.index + 1).is_multiple_of(every) {
@@ -397,8 +478,39 @@ fn run_inner(
                     recorder: &rec.state,
                 })?;
                 show(step.lambda_end, &stats, "");
+                if let (Some(e), Some(direction)) = (switch, secondary) {
+                    let model: &mut ShellModel = path.problem();
+                    let (u, lambda, dir) =
+                        secondary_start(model, &step, &e, direction, &cfg, &metric, &mut event_lu)?;
+                    rec.state.switched_at = Some(e.lambda);
+                    let cp = Checkpoint {
+                        index: step.index + 1,
+                        u,
+                        lambda,
+                        prev_dir: Some((dir, 0.0)),
+                        stats: path.stats().clone(),
+                    };
+                    let model = path.into_problem();
+                    path = AnmPath::resume(model, cp, cfg.clone());
+                }
             };
+            // A path stopped before its end: the last step's critical
+            // points against the tangent at its end (summary.json only).
+            if let Some(prev) = pending.take() {
+                let (u, l) = path.state();
+                let (u, l) = (u.to_vec(), l);
+                let model: &mut ShellModel = path.problem();
+                let n1 = match prev.negative_pivots {
+                    Some(_) => end_inertia(model, &mut event_lu, &u, l)?,
+                    None => None,
+                };
+                for e in critical_points(model, &mut event_lu, &prev, n1, None, &locate)? {
+                    record_event(&mut rec, model, e)?;
+                }
+            }
             let (u, l) = path.state();
+            let ls = event_lu.stats();
+            event_factorizations = ls.ldlt + ls.lblt + ls.lu + ls.mumps;
             (stop, path.stats().clone(), (u.to_vec(), l))
         }
         Method::Newton(ncfg) => {
@@ -439,6 +551,7 @@ fn run_inner(
                         factorizations: stats.factorizations,
                         solves: stats.solves,
                         negative_pivots: stats.linear.negative_pivots,
+                        events: vec![],
                     })?;
                     if grid.iter().any(|g| (g - lambda).abs() < 1e-12) {
                         let g = (lambda / d).round() * d;
@@ -507,6 +620,7 @@ fn run_inner(
                 factorizations: 1,
                 solves: 1,
                 negative_pivots: stats.linear.negative_pivots,
+                events: vec![],
             })?;
             let u: Vec<f64> = u1.iter().map(|x| x * l_end).collect();
             (PathStop::End { lambda: l_end }, stats, (u, l_end))
@@ -586,6 +700,9 @@ fn run_inner(
         peak_rss_bytes: crate::output::peak_rss_bytes(),
         far_nodes_skipped: far_skipped,
         resumed_at_step,
+        events: rec.state.events.clone(),
+        switched_at: rec.state.switched_at,
+        event_factorizations,
         columns: rec.columns.clone(),
         history: rec.state.history.clone(),
         snapshots: rec.state.snapshots.clone(),
@@ -602,6 +719,173 @@ fn run_inner(
         }
     }
     Ok(report)
+}
+
+/// Mode amplitude of the first point on the secondary branch: its largest
+/// displacement is this fraction of the model's length scale.
+const BRANCH_OFFSET: f64 = 1e-3;
+
+/// The first point of the secondary branch at the bifurcation `e` of
+/// `step` (docs/bifurcation.md): from the located point (U_c, lambda_c)
+/// moved along the mode phi, U_c + delta phi (largest displacement
+/// BRANCH_OFFSET × length scale, sign `direction` of the mode whose
+/// largest displacement is positive), Newton-corrected on the hyperplane
+/// <U − U_c − delta phi, phi>~ = 0 (fixed mode amplitude, lambda free),
+/// which the primary path leaves and the bifurcated branch crosses.
+/// Returns the point and the direction (phi, 0) that orients the next step.
+fn secondary_start(
+    model: &mut ShellModel,
+    step: &PathStep,
+    e: &Event,
+    direction: f64,
+    cfg: &crate::series::ContinuationConfig,
+    metric: &Metric,
+    lu: &mut LinearSolver,
+) -> Result<(Vec<f64>, f64, Vec<f64>)> {
+    let (uc, lc) = step.eval(e.a);
+    let full = model.expand(&e.mode, 0.0);
+    let n = model.n_nodes();
+    let mut big = 0.0f64;
+    for i in 0..n {
+        for k in 0..3 {
+            let v = full[crate::fe::dof::index(i, k)];
+            if v.abs() > big.abs() {
+                big = v;
+            }
+        }
+    }
+    if big == 0.0 {
+        return Err(Error::SingularMatrix {
+            step: step.index,
+            param: "lambda",
+            at: e.lambda,
+            detail: "the bifurcation mode has no displacement: no branch to switch to".into(),
+        });
+    }
+    let delta = direction * BRANCH_OFFSET * model.length_scale / big;
+    let phi: Vec<f64> = e.mode.iter().map(|v| delta * v).collect();
+    let start: Vec<f64> = uc.iter().zip(&phi).map(|(u, p)| u + p).collect();
+    let mut stats = Stats::default();
+    let settings = correct::Settings {
+        tol: cfg.residual_tol,
+        max_iter: 30,
+        jacobian: correct::Jacobian::Fresh,
+        max_residual: f64::INFINITY,
+        step: step.index,
+    };
+    let constraint = correct::Constraint::Arclength {
+        t_u: &phi,
+        t_lambda: 0.0,
+        reference: None,
+    };
+    let end = correct::correct(
+        model,
+        start,
+        lc,
+        &constraint,
+        &settings,
+        metric,
+        lu,
+        &mut stats,
+    )?;
+    Ok((end.u, end.lambda, phi))
+}
+
+/// Whether the step reached the path's target (it is the last one).
+fn path_at_end(step: &PathStep, cfg: &crate::series::ContinuationConfig) -> bool {
+    let forward = if cfg.lambda_end >= step.lambda[0] {
+        1.0
+    } else {
+        -1.0
+    };
+    (step.lambda_end - cfg.lambda_end) * forward >= -1e-14 * cfg.lambda_end.abs().max(1.0)
+}
+
+/// Negative pivots of the tangent at (u, lambda) (None when it is not
+/// symmetric): the inertia at the end of the last step (called only when
+/// the step's start tangent had an inertia: one more factorization per
+/// run, or per step with solver.branch = "secondary" before the switch).
+fn end_inertia(
+    model: &mut ShellModel,
+    lu: &mut LinearSolver,
+    u: &[f64],
+    lambda: f64,
+) -> Result<Option<usize>> {
+    let (k, _) = model.tangent(u, lambda)?;
+    let f = lu.factorize(&k).map_err(|detail| Error::SingularMatrix {
+        step: 0,
+        param: "lambda",
+        at: lambda,
+        detail: format!("tangent at the path's end: {detail}"),
+    })?;
+    Ok(f.inertia().map(|i| i.0))
+}
+
+/// The critical points that `step` crosses, given the negative pivots `n1`
+/// and lambda_1 `next_l1` at its end (series::bifurcation): located on the
+/// step's series when the inertia changes; a limit point from dlambda/da
+/// when only lambda_1 changes sign (non-symmetric tangents).
+fn critical_points(
+    model: &mut ShellModel,
+    lu: &mut LinearSolver,
+    step: &PathStep,
+    n1: Option<usize>,
+    next_l1: Option<f64>,
+    settings: &bifurcation::Settings,
+) -> Result<Vec<Event>> {
+    match (step.negative_pivots, n1) {
+        (Some(n0), Some(n1)) if n0 != n1 => bifurcation::locate(model, step, n0, n1, lu, settings),
+        (Some(_), Some(_)) => Ok(vec![]),
+        _ => {
+            // No inertia: a geometric series flags the step; the tangent's
+            // real eigenvalue nearest zero locates the point.
+            // A failed location (e.g. a complex pair nearest zero) leaves
+            // the geometric estimate as the step's only event.
+            if step.geometric.is_some()
+                && let Ok(Some(e)) = bifurcation::locate_unsymmetric(model, step, lu, settings)
+            {
+                return Ok(vec![e]);
+            }
+            Ok(match next_l1 {
+                Some(l1) if l1.signum() != step.lambda[1].signum() => {
+                    vec![bifurcation::limit_point(step)]
+                }
+                _ => vec![],
+            })
+        }
+    }
+}
+
+/// Records an event: its mode as `mode_K.vtu` (K counts the run's events
+/// from 1) and its dominant wavelength.
+fn record_event(rec: &mut Recorder, model: &ShellModel, e: Event) -> Result<EventRecord> {
+    let k = rec.state.events.len() + 1;
+    let full = model.expand(&e.mode, 0.0);
+    let wave = crate::output::mode::wavelength(&model.x0, &full);
+    let mode = match &rec.dir {
+        Some(d) => {
+            let name = format!("mode_{k}.vtu");
+            crate::output::mode::write(&d.join(&name), &model.x0, &rec.scene.mesh.quads, &full)?;
+            Some(name)
+        }
+        None => None,
+    };
+    let r = EventRecord {
+        kind: e.kind.name().to_string(),
+        lambda: e.lambda,
+        step: e.step + 1,
+        a: e.a,
+        negative_pivots: e.negative_pivots,
+        bracket: e.bracket,
+        kappa: e.kappa.is_finite().then_some(e.kappa),
+        factorizations: e.factorizations,
+        mode,
+        wavelength: wave.map(|w| w.wavelength),
+        half_waves: wave.map(|w| w.half_waves),
+        wave_direction: wave.map(|w| w.direction.to_string()),
+    };
+    rec.event(r.clone())?;
+    Ok(r)
 }
 
 /// Borrowed form of [`RunCheckpoint`] for writing.

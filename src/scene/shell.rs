@@ -176,6 +176,8 @@ struct RawSolver {
     newton_max_step: Option<f64>,
     newton_tol: Option<f64>,
     linear_solver: Option<String>,
+    branch: Option<String>,
+    branch_direction: Option<f64>,
 }
 
 #[derive(Deserialize)]
@@ -288,6 +290,17 @@ pub enum Method {
     Linear,
 }
 
+/// Which branch an ANM path follows at the first bifurcation it crosses
+/// (`solver.branch`, docs/bifurcation.md).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Branch {
+    /// Stay on the path (critical points are reported only).
+    Primary,
+    /// Leave it along the located mode, in `direction` (+1 or −1) of the
+    /// mode whose largest displacement component is positive.
+    Secondary { direction: f64 },
+}
+
 /// Output settings.
 #[derive(Clone, Debug)]
 pub struct OutputSpec {
@@ -317,6 +330,8 @@ pub struct ShellScene {
     pub probes: Vec<Probe>,
     pub method: Method,
     pub solver: ContinuationConfig,
+    /// solver.branch (ANM only).
+    pub branch: Branch,
     /// Characteristic length of the step control (solver.length_scale).
     pub length_scale: f64,
     pub output: OutputSpec,
@@ -527,6 +542,7 @@ pub fn load(path: &Path) -> Result<ShellScene> {
     };
     let probes = probes(&ctx, &raw.probe, &fixed, &obstacles, contact.is_some())?;
     let (method, solver, length_scale) = solver(&c, &raw.solver, size)?;
+    let branch = branch(&c, &raw.solver, &method)?;
     let o = &raw.output;
     let lambda_step = c.positive("output.lambda_step", o.lambda_step)?;
     let rows = solver.lambda_end.abs() / lambda_step;
@@ -555,6 +571,7 @@ pub fn load(path: &Path) -> Result<ShellScene> {
     }
     ctx.extra.clear();
     Ok(ShellScene {
+        branch,
         file: path.to_path_buf(),
         description: raw.scene.description,
         directors,
@@ -1201,6 +1218,43 @@ fn probes(
         });
     }
     Ok(out)
+}
+
+/// solver.branch and solver.branch_direction.
+fn branch(c: &Checker, s: &RawSolver, method: &Method) -> Result<Branch> {
+    let secondary = match s.branch.as_deref() {
+        None | Some("primary") => false,
+        Some("secondary") => true,
+        Some(other) => {
+            return Err(c.fail(
+                "solver.branch",
+                format!("expected \"primary\" or \"secondary\", got \"{other}\""),
+            ));
+        }
+    };
+    if secondary && !matches!(method, Method::Anm) {
+        return Err(c.fail(
+            "solver.branch",
+            "\"secondary\" needs solver.method = \"anm\"",
+        ));
+    }
+    match (secondary, s.branch_direction) {
+        (false, Some(_)) => Err(c.fail(
+            "solver.branch_direction",
+            "only with solver.branch = \"secondary\"; remove it",
+        )),
+        (false, None) => Ok(Branch::Primary),
+        (true, d) => {
+            let direction = d.unwrap_or(1.0);
+            if direction != 1.0 && direction != -1.0 {
+                return Err(c.fail(
+                    "solver.branch_direction",
+                    format!("must be 1 or -1, got {direction}"),
+                ));
+            }
+            Ok(Branch::Secondary { direction })
+        }
+    }
 }
 
 fn solver(c: &Checker, s: &RawSolver, size: f64) -> Result<(Method, ContinuationConfig, f64)> {

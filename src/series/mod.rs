@@ -3,6 +3,7 @@
 //! supplies the series, step length, Padé extension, correction, singularity
 //! detection and statistics.
 
+pub mod bifurcation;
 pub mod continuation;
 pub mod correct;
 pub mod dae;

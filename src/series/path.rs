@@ -213,6 +213,11 @@ impl<'p, P: ContinuationProblem> Path<'p, P> {
         &self.stats
     }
 
+    /// Gives the problem back (e.g. to start another path on it).
+    pub fn into_problem(self) -> &'p mut P {
+        self.problem
+    }
+
     /// The problem (e.g. for output grid corrections between steps).
     pub fn problem(&mut self) -> &mut P {
         self.problem

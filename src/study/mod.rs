@@ -6,6 +6,7 @@
 pub mod audit;
 pub mod bench;
 pub mod bench_shell;
+pub mod buckle;
 pub mod check;
 pub mod factor;
 pub mod pool;

@@ -4,6 +4,7 @@
 #[path = "../common/shell.rs"]
 mod shell_common;
 
+mod bifurcation;
 mod derivatives_fd;
 mod linear_macneal_harder;
 mod nonlinear_cantilevers;

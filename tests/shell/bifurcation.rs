@@ -1,0 +1,328 @@
+//! Critical points and buckling (issue 14, DESIGN §8) against closed forms:
+//! the Euler column (cantilever strip, P_cr = pi² E I / (4 L²)) by
+//! `anm buckle` and located on the ANM path, its post-buckled branch
+//! against the elastica, and the simply supported square plate under
+//! uniaxial compression (sigma_cr = 4 pi² E t² / (12 (1 − nu²) b²)). The
+//! scenes put P_cr (resp. sigma_cr t) at lambda = 1.
+
+use anm::run::run_loaded;
+use anm::scene::shell::{ShellScene, load};
+use anm::study::buckle::buckle;
+use std::f64::consts::PI;
+
+fn scene(name: &str) -> ShellScene {
+    let path = format!(
+        "{}/scenes/verification/{name}.toml",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    load(std::path::Path::new(&path)).unwrap_or_else(|e| panic!("{name}: {e}"))
+}
+
+/// Complete elliptic integral of the first kind K(k) = pi / (2 AGM(1,
+/// sqrt(1 − k²))) (Abramowitz & Stegun 17.6; DLMF 19.8.5).
+fn elliptic_k(k: f64) -> f64 {
+    let (mut a, mut b) = (1.0f64, (1.0 - k * k).sqrt());
+    while (a - b).abs() > 1e-15 * a {
+        (a, b) = (0.5 * (a + b), (a * b).sqrt());
+    }
+    PI / (2.0 * a)
+}
+
+/// Elastica of the clamped–free column: P / P_cr = (2 K(sin(alpha/2)) / pi)².
+fn elastica(alpha: f64) -> f64 {
+    (2.0 * elliptic_k((0.5 * alpha).sin()) / PI).powi(2)
+}
+
+#[test]
+fn elliptic_integral_by_the_agm_matches_tabulated_values() {
+    // A&S Table 17.1: K(sin 30°) = 1.685750355, K(sin 60°) = 2.156515647.
+    assert!((elliptic_k(0.5) - 1.685_750_355).abs() < 1e-9);
+    assert!((elliptic_k(60f64.to_radians().sin()) - 2.156_515_647).abs() < 1e-9);
+    assert!((elastica(1e-6) - 1.0).abs() < 1e-10);
+}
+
+#[test]
+fn euler_column_buckle_and_path_bifurcation_match_the_closed_form() {
+    let sc = scene("euler-column");
+    let b = buckle(&sc, 0.0, 2, None).expect("buckle");
+    print!("{}", anm::study::buckle::table(&b));
+    let mu = b.modes[0].mu;
+    println!("| case | lambda_cr | closed form | relative error |\n|---|---|---|---|");
+    println!("| anm buckle (20 x 1) | {mu:.9} | 1 | {:.2e} |", mu - 1.0);
+    assert!((mu - 1.0).abs() <= 5e-3, "buckle: {mu}");
+    // The second mode: (3 pi / 2L)² → 9 P_cr.
+    assert!(
+        (b.modes[1].mu / 9.0 - 1.0).abs() <= 2e-2,
+        "{}",
+        b.modes[1].mu
+    );
+    // Mode shape 1 − cos(pi x / 2L): a quarter wave, wavelength 4L = 40.
+    let w = b.modes[0].wavelength.expect("wavelength");
+    assert!((w / 40.0 - 1.0).abs() < 0.05, "wavelength {w}");
+
+    // The perfect column's path crosses the bifurcation in one step.
+    let r = run_loaded(&sc, None, false).expect("run");
+    assert_eq!(r.stop.reason, "end");
+    let bif: Vec<_> = r
+        .events
+        .iter()
+        .filter(|e| e.kind == "bifurcation")
+        .collect();
+    assert_eq!(bif.len(), 1, "{:?}", r.events);
+    let e = bif[0];
+    println!(
+        "| located on the path | {:.9} | 1 | {:.2e} | ({} factorizations, step {}, pivots {:?})",
+        e.lambda,
+        e.lambda - 1.0,
+        e.factorizations,
+        e.step,
+        e.negative_pivots
+    );
+    assert!((e.lambda - 1.0).abs() <= 5e-3, "{}", e.lambda);
+    assert_eq!(e.negative_pivots, Some((0, 1)));
+    assert!((e.wavelength.unwrap() / 40.0 - 1.0).abs() < 0.05);
+
+    // Location accuracy, independently of the locator: linearized buckling
+    // (subspace iteration on the pencil) about the path state just before
+    // the located point, lambda_b = 0.999 lambda*, predicts
+    // lambda_b + mu_1; its linearization error is O((lambda* − lambda_b)²)
+    // times the prebuckling nonlinearity (strains ~ 2e-5), far below 1e-6.
+    let lb = 0.999 * e.lambda;
+    let near = buckle(&sc, lb, 1, None).expect("buckle near");
+    let predicted = lb + near.modes[0].mu;
+    let rel = (predicted - e.lambda).abs() / e.lambda;
+    println!(
+        "location: path {:.12}, buckle about {lb:.9}: {predicted:.12}, relative difference {rel:.2e} (target 1e-6)",
+        e.lambda
+    );
+    assert!(rel <= 1e-6, "{rel:e}");
+}
+
+/// Worst relative difference of P/P_cr from the elastica over the history
+/// rows with alpha >= 10° (below, an imperfection governs), and the largest
+/// alpha; prints the table.
+fn elastica_error(r: &anm::run::RunReport) -> (f64, f64) {
+    let col = |n: &str| r.columns.iter().position(|c| c == n).unwrap();
+    let (wx, wz) = (col("wx_tip"), col("wz_tip"));
+    println!("| P/P_cr | alpha (deg) | elastica | relative error |\n|---|---|---|---|");
+    let mut worst: f64 = 0.0;
+    let mut alpha_max: f64 = 0.0;
+    for row in &r.history {
+        let alpha = row[wx].abs().atan2(1.0 + row[wz]);
+        if alpha < 10f64.to_radians() {
+            continue;
+        }
+        let want = elastica(alpha);
+        let err = row[0] / want - 1.0;
+        println!(
+            "| {:.3} | {:.2} | {want:.6} | {err:+.2e} |",
+            row[0],
+            alpha.to_degrees()
+        );
+        worst = worst.max(err.abs());
+        alpha_max = alpha_max.max(alpha);
+    }
+    println!(
+        "worst {worst:.2e} up to alpha = {:.1}°",
+        alpha_max.to_degrees()
+    );
+    (worst, alpha_max.to_degrees())
+}
+
+#[test]
+fn post_buckled_column_follows_the_elastica_to_120_degrees() {
+    // With a lateral imperfection (1e-3 P): the path itself goes round the
+    // bifurcation.
+    let r = run_loaded(&scene("euler-column-postbuckling"), None, false).expect("run");
+    assert_eq!(r.stop.reason, "end");
+    let (worst, alpha_max) = elastica_error(&r);
+    assert!(alpha_max >= 120.0, "{alpha_max}");
+    assert!(worst <= 5e-3, "{worst:e}");
+}
+
+#[test]
+fn perfect_column_switches_to_the_bifurcated_branch_in_either_direction() {
+    let mut sc = scene("euler-column-secondary");
+    let r = run_loaded(&sc, None, false).expect("run");
+    assert_eq!(r.stop.reason, "end");
+    let at = r.switched_at.expect("switched");
+    println!("left the primary path at lambda = {at:.9}");
+    assert!((at - 1.0).abs() <= 5e-3, "{at}");
+    // The post-buckled branch is stable: no further event.
+    assert_eq!(r.events.len(), 1, "{:?}", r.events);
+    let (worst, alpha_max) = elastica_error(&r);
+    assert!(alpha_max >= 120.0, "{alpha_max}");
+    assert!(worst <= 5e-3, "{worst:e}");
+    // The other direction: the mirror image (uz of the tip reversed), same
+    // load-rotation curve.
+    sc.branch = anm::scene::shell::Branch::Secondary { direction: -1.0 };
+    let m = run_loaded(&sc, None, false).expect("run, direction -1");
+    assert_eq!(m.stop.reason, "end");
+    let (uz, uz_m) = (r.end["uz_tip"], m.end["uz_tip"]);
+    println!("tip uz at lambda = 1.9: direction +1 {uz:.6}, direction -1 {uz_m:.6}");
+    assert!(uz.signum() != uz_m.signum() && ((uz + uz_m) / uz).abs() < 1e-6);
+    let (worst_m, _) = elastica_error(&m);
+    assert!(worst_m <= 5e-3, "{worst_m:e}");
+}
+
+#[test]
+fn simply_supported_plate_buckles_at_the_closed_form_stress() {
+    let sc = scene("plate-buckling");
+    let b = buckle(&sc, 0.0, 2, None).expect("buckle");
+    print!("{}", anm::study::buckle::table(&b));
+    let mu = b.modes[0].mu;
+    println!(
+        "plate 16 x 16: sigma_cr / closed form = {mu:.6} (error {:.2e}, tolerance 1e-2)",
+        mu - 1.0
+    );
+    assert!((mu - 1.0).abs() <= 1e-2, "{mu}");
+    // One half-wave each way: wavelength 2a.
+    let h = b.modes[0].half_waves.unwrap();
+    assert!((h - 1.0).abs() < 0.05, "half-waves {h}");
+    // The second mode, two half-waves along x: k = (2 + 1/2)² = 6.25.
+    assert!(
+        (b.modes[1].mu / (6.25 / 4.0) - 1.0).abs() <= 3e-2,
+        "{}",
+        b.modes[1].mu
+    );
+}
+
+#[test]
+fn arch_limit_points_are_told_apart_and_located_where_lambda_turns() {
+    // The shallow clamped arch passes a limit point, turns back and snaps
+    // (two limit points). Located by the tangent's eigenvalue crossing
+    // zero, each must sit where the same series has dlambda/da = 0 (the
+    // other characterization of a limit point; bisection on the series'
+    // polynomial, no tangent involved).
+    use anm::series::bifurcation::{self, Kind};
+    let sc = scene("clamped-arch-snap");
+    let r = run_loaded(&sc, None, false).expect("run");
+    let kinds: Vec<&str> = r.events.iter().map(|e| e.kind.as_str()).collect();
+    assert_eq!(kinds, ["limit_point", "limit_point"], "{:?}", r.events);
+    let mut model = anm::run::build::build_model(&sc).expect("model");
+    model.length_scale = sc.length_scale;
+    let mut cfg = sc.solver.clone();
+    cfg.lambda_scale = cfg.lambda_end.abs();
+    let settings = bifurcation::Settings {
+        lambda_scale: cfg.lambda_scale,
+        ..Default::default()
+    };
+    let n = anm::series::ContinuationProblem::ndof(&model);
+    let mut steps = vec![];
+    {
+        let mut path = anm::series::Path::new(&mut model, vec![0.0; n], 0.0, cfg.clone());
+        while let Ok(s) = path.step() {
+            steps.push(s);
+        }
+    }
+    let mut lu = anm::linalg::LinearSolver::default();
+    println!(
+        "| step | lambda located (eigenvalue) | lambda at dlambda/da = 0 | relative difference | a difference / step length |\n|---|---|---|---|---|"
+    );
+    let mut found = 0;
+    for w in steps.windows(2) {
+        let (n0, n1) = (w[0].negative_pivots.unwrap(), w[1].negative_pivots.unwrap());
+        if n0 == n1 {
+            continue;
+        }
+        let located = bifurcation::locate(&mut model, &w[0], n0, n1, &mut lu, &settings).unwrap();
+        assert_eq!(located.len(), 1);
+        assert_eq!(located[0].kind, Kind::LimitPoint);
+        let turn = bifurcation::limit_point(&w[0]);
+        let rel = (located[0].lambda - turn.lambda).abs() / turn.lambda.abs();
+        // lambda is stationary there: the path parameter is the sharper test.
+        let da = (located[0].a - turn.a).abs() / w[0].length;
+        println!(
+            "| {} | {:.15} | {:.15} | {rel:.1e} | {da:.1e} |",
+            w[0].index + 1,
+            located[0].lambda,
+            turn.lambda
+        );
+        assert!(rel <= 1e-6, "{rel:e}");
+        assert!(da <= 1e-4, "{da:e}");
+        found += 1;
+    }
+    assert_eq!(found, 2);
+}
+
+#[test]
+fn cantilever_under_end_moment_bifurcates_out_of_plane_and_follows_the_branch() {
+    // Issue 14, 5d. No closed form for this point: its two independent
+    // estimates must agree, the Cochelin–Medale geometric series (the
+    // step's series with its geometric part removed, at a = alpha_1) and
+    // the root of the tangent's real eigenvalue nearest zero on the series.
+    let mut sc = scene("cantilever-moment-bifurcation");
+    let r = run_loaded(&sc, None, false).expect("run");
+    assert_eq!(r.stop.reason, "end");
+    let find = |k: &str| r.events.iter().find(|e| e.kind == k).cloned();
+    let g = find("geometric").expect("geometric event");
+    let b = find("bifurcation").expect("located bifurcation");
+    let rel = (g.lambda - b.lambda).abs() / b.lambda;
+    println!(
+        "out-of-plane bifurcation: located lambda = M / M_max = {:.12} (bracket {:.1e}, {} factorizations), geometric-series estimate {:.12}, relative difference {rel:.1e}",
+        b.lambda, b.bracket, b.factorizations, g.lambda
+    );
+    assert!((0.78..0.80).contains(&b.lambda), "{}", b.lambda);
+    assert!(rel <= 1e-6, "{rel:e}");
+    assert_eq!(r.switched_at, Some(b.lambda));
+    // The followed branch is out of plane; the tip of the planar (primary)
+    // solution would have uy = 0 and be back at the clamp (ux = -L).
+    let uy = r.end["uy_tip"];
+    println!(
+        "secondary branch at lambda = 1: tip uy = {uy:.6}, ux = {:.6}, uz = {:.6}",
+        r.end["ux_tip"], r.end["uz_tip"]
+    );
+    assert!(uy.abs() > 0.1, "{uy}");
+    sc.branch = anm::scene::shell::Branch::Primary;
+    let p = run_loaded(&sc, None, false).expect("primary run");
+    println!(
+        "primary path at lambda = 1: tip uy = {:.2e}, ux = {:.6} (closed circle: ux = -10)",
+        p.end["uy_tip"], p.end["ux_tip"]
+    );
+    assert!(p.end["uy_tip"].abs() < 1e-6);
+    assert!((p.end["ux_tip"] + 10.0).abs() < 0.05);
+}
+
+#[test]
+fn bad_branch_keys_and_an_unstable_buckling_state_are_clear_errors() {
+    let base = std::fs::read_to_string(format!(
+        "{}/scenes/verification/euler-column.toml",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .unwrap();
+    let dir = std::env::temp_dir().join("anm-bifurcation-bad-input");
+    std::fs::create_dir_all(&dir).unwrap();
+    let cases = [
+        ("branch = \"tertiary\"", "solver.branch"),
+        ("branch_direction = -1.0", "solver.branch_direction"),
+        (
+            "branch = \"secondary\"\nbranch_direction = 2.0",
+            "solver.branch_direction",
+        ),
+        (
+            "branch = \"secondary\"\nmethod = \"newton\"",
+            "solver.branch",
+        ),
+    ];
+    for (k, (extra, key)) in cases.iter().enumerate() {
+        let text = base.replace("lambda_end = 2.0", &format!("lambda_end = 2.0\n{extra}"));
+        let text = if extra.contains("newton") {
+            text.replace("order = 20\neps = 1e-8\n", "")
+        } else {
+            text
+        };
+        let p = dir.join(format!("case{k}.toml"));
+        std::fs::write(&p, text).unwrap();
+        let e = load(&p)
+            .err()
+            .unwrap_or_else(|| panic!("{extra}: accepted"));
+        let msg = e.to_string();
+        println!("{extra:?}: {msg}");
+        assert!(msg.contains(key) && msg.contains("case"), "{msg}");
+    }
+    // Past the bifurcation the base state is unstable: refused, with why.
+    let e = buckle(&scene("euler-column"), 1.5, 1, None).expect_err("unstable base state");
+    let msg = e.to_string();
+    println!("{msg}");
+    assert!(msg.contains("negative pivot"), "{msg}");
+}
