@@ -221,6 +221,18 @@ pub fn pencil(
     ))
 }
 
+/// `start` (or a fixed vector when it is absent, empty or of the wrong
+/// length), normalized.
+fn unit_start(start: Option<&[f64]>, n: usize) -> Vec<f64> {
+    let mut x = match start {
+        Some(s) if s.len() == n && norm(s) > 0.0 => s.to_vec(),
+        _ => start_vectors(n, 1).pop().unwrap_or_default(),
+    };
+    let s = norm(&x);
+    x.iter_mut().for_each(|v| *v /= s);
+    x
+}
+
 /// The eigenvalue of smallest modulus of the symmetric A (factorized as
 /// `a`, products by `a_mul`) and its unit eigenvector, by inverse iteration
 /// from `start` (or a fixed vector) until the Rayleigh quotient changes by
@@ -234,12 +246,7 @@ pub fn smallest_eigenvalue(
     tol: f64,
     max_iter: usize,
 ) -> Result<(f64, Vec<f64>, usize), String> {
-    let mut x = match start {
-        Some(s) if s.len() == n && norm(s) > 0.0 => s.to_vec(),
-        _ => start_vectors(n, 1).pop().unwrap_or_default(),
-    };
-    let s = norm(&x);
-    x.iter_mut().for_each(|v| *v /= s);
+    let mut x = unit_start(start, n);
     let mut kappa = f64::NAN;
     for it in 1..=max_iter {
         let mut y = a.solve(&x);
@@ -271,12 +278,7 @@ pub fn nearest_real_eigenvalue(
     tol: f64,
     max_iter: usize,
 ) -> Result<(f64, Vec<f64>, usize), String> {
-    let mut x = match start {
-        Some(s) if s.len() == n && norm(s) > 0.0 => s.to_vec(),
-        _ => start_vectors(n, 1).pop().unwrap_or_default(),
-    };
-    let s = norm(&x);
-    x.iter_mut().for_each(|v| *v /= s);
+    let mut x = unit_start(start, n);
     let reference = x.clone();
     let mut kappa = f64::NAN;
     for it in 1..=max_iter {

@@ -34,7 +34,7 @@
 use super::continuation::{ContinuationProblem, PathStep};
 use super::taylor;
 use crate::error::{Error, Result};
-use crate::linalg::{LinearSolver, dot, eigen};
+use crate::linalg::{Factorization, LinearSolver, SparseMatrix, dot, eigen};
 use serde::Serialize;
 
 /// What a critical point is.
@@ -122,15 +122,8 @@ fn sample<P: ContinuationProblem + ?Sized>(
     a: f64,
     start: Option<&[f64]>,
 ) -> Result<Sample> {
-    let (u, lambda) = step.eval(a);
-    let (k, _) = problem.tangent(&u, lambda)?;
-    let fail = |detail: String| Error::SingularMatrix {
-        step: step.index,
-        param: "lambda",
-        at: lambda,
-        detail: format!("locating a critical point: {detail}"),
-    };
-    let f = lu.factorize(&k).map_err(fail)?;
+    let (k, f, lambda) = factor_at(problem, step, lu, a)?;
+    let fail = |detail: String| locating_error(step, lambda, detail);
     let count = f
         .inertia()
         .map(|i| i.0)
@@ -144,6 +137,30 @@ fn sample<P: ContinuationProblem + ?Sized>(
         kappa,
         mode,
     })
+}
+
+/// The tangent at the step's series point a, factorized, and lambda there.
+fn factor_at<P: ContinuationProblem + ?Sized>(
+    problem: &mut P,
+    step: &PathStep,
+    lu: &mut LinearSolver,
+    a: f64,
+) -> Result<(SparseMatrix, Factorization, f64)> {
+    let (u, lambda) = step.eval(a);
+    let (k, _) = problem.tangent(&u, lambda)?;
+    let f = lu
+        .factorize(&k)
+        .map_err(|d| locating_error(step, lambda, d))?;
+    Ok((k, f, lambda))
+}
+
+fn locating_error(step: &PathStep, lambda: f64, detail: String) -> Error {
+    Error::SingularMatrix {
+        step: step.index,
+        param: "lambda",
+        at: lambda,
+        detail: format!("locating a critical point: {detail}"),
+    }
 }
 
 /// dlambda/da of the step's polynomial series.
@@ -303,15 +320,8 @@ pub fn locate_unsymmetric<P: ContinuationProblem + ?Sized>(
     let n = step.u.len() - 1;
     let start = step.u[n].clone();
     let mut eval = |a: f64, start: &[f64]| -> Result<(f64, f64, Vec<f64>)> {
-        let (u, lambda) = step.eval(a);
-        let (k, _) = problem.tangent(&u, lambda)?;
-        let fail = |detail: String| Error::SingularMatrix {
-            step: step.index,
-            param: "lambda",
-            at: lambda,
-            detail: format!("locating a critical point: {detail}"),
-        };
-        let f = lu.factorize(&k).map_err(fail)?;
+        let (k, f, lambda) = factor_at(problem, step, lu, a)?;
+        let fail = |detail: String| locating_error(step, lambda, detail);
         let (kappa, mode, _) =
             eigen::nearest_real_eigenvalue(&f, k.n, Some(start), 1e-12, 400).map_err(fail)?;
         Ok((lambda, kappa, mode))
