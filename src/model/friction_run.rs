@@ -7,8 +7,8 @@ use crate::error::Result;
 use crate::output::plot::{Curve, Panel, draw};
 use crate::output::{CsvStream, Stop, create_dir, write_json};
 use crate::scene::friction::{FrictionScene, InitMode};
+use crate::series::Stats;
 use crate::series::dae::{self, DaeConfig, Initialization};
-use crate::series::{Stats, taylor};
 use serde::Serialize;
 use std::path::Path;
 use std::time::Instant;
@@ -40,6 +40,9 @@ pub struct FrictionRun {
     pub singular_events: Vec<(f64, f64)>,
     /// The accepted steps' series (u, v, z), for checks and dense output.
     pub series: Vec<crate::series::TimeStep>,
+    /// `solver.time_step` and what the implicit steps cost.
+    pub time_step: &'static str,
+    pub implicit: crate::series::dae::ImplicitCounts,
 }
 
 /// Solves the scene; writes the outputs into `out_dir` when given.
@@ -71,6 +74,7 @@ pub fn run(scene: &FrictionScene, out_dir: Option<&Path>, progress: bool) -> Res
         residual_tol: scene.residual_tol,
         min_step: scene.min_step,
         stop_at_singularity: scene.stop_at_singularity,
+        stepping: scene.stepping,
     };
     let grid = scene.output_times();
     let mut next = 0;
@@ -182,6 +186,8 @@ pub fn run(scene: &FrictionScene, out_dir: Option<&Path>, progress: bool) -> Res
         t_singular_estimate,
         singular_events: result.events.clone(),
         series,
+        time_step: scene.stepping.name(),
+        implicit: result.implicit,
     };
     if let Some(dir) = out_dir {
         write_outputs(&run, model, scene, dir)?;
@@ -191,10 +197,7 @@ pub fn run(scene: &FrictionScene, out_dir: Option<&Path>, progress: bool) -> Res
 
 /// dy/dt of every series of the step at time t.
 fn derivative(step: &crate::series::TimeStep, t: f64) -> Vec<f64> {
-    step.series
-        .iter()
-        .map(|c| taylor::eval_derivative(c, t - step.t0))
-        .collect()
+    step.eval_derivative(t)
 }
 
 /// Fits a_k = c (t* - t_k) on the last five steps (least squares on a vs t)
@@ -284,6 +287,9 @@ struct Summary<'a> {
     columns: &'a [String],
     order: usize,
     eps: f64,
+    /// `solver.time_step`, and the implicit steps among `steps`.
+    time_step: &'a str,
+    implicit: crate::series::dae::ImplicitCounts,
     init: &'a str,
     initial_residual: f64,
     output_rows: usize,
@@ -308,6 +314,8 @@ impl<'a> From<&'a FrictionRun> for Summary<'a> {
             columns: &run.columns,
             order: run.order,
             eps: run.eps,
+            time_step: run.time_step,
+            implicit: run.implicit,
             init: &run.init,
             initial_residual: run.initial_residual,
             output_rows: run.history.len(),
