@@ -22,7 +22,8 @@ pub struct FrictionRun {
     /// Rows on the output grid (up to the stop).
     pub history: Vec<Vec<f64>>,
     /// Step ends: step, t, h (length), end residual, slip velocity,
-    /// geometric-series distance (0: none), then the history columns.
+    /// geometric-series distance (0: none), the history columns, then 1 for
+    /// an implicit step (0: explicit).
     pub steps: Vec<Vec<f64>>,
     pub order: usize,
     pub eps: f64,
@@ -119,6 +120,7 @@ pub fn run(scene: &FrictionScene, out_dir: Option<&Path>, progress: bool) -> Res
                 .into_iter()
                 .skip(1),
         );
+        row.push(f64::from(u8::from(step.implicit)));
         if let Some((_, s)) = &mut streams {
             s.row(&row)?;
         }
@@ -247,6 +249,7 @@ fn step_columns(model: &dyn FrictionModel) -> Vec<&'static str> {
         "geometric_distance",
     ];
     cols.extend(model.columns().iter().skip(1));
+    cols.push("implicit");
     cols
 }
 

@@ -577,6 +577,24 @@ fn ratio_length(series: &[Vec<f64>], eps: f64, n_ord: usize) -> f64 {
     }
 }
 
+/// Distance to a singular point when the last terms of the series form a
+/// geometric series (Cochelin–Medale test on (u, v, z)).
+fn geometric_distance<P: DaeProblem + ?Sized>(
+    eng: &mut Engine<P>,
+    series: &[Vec<f64>],
+    n_ord: usize,
+) -> Option<f64> {
+    if n_ord < 3 {
+        return None;
+    }
+    for (term, p) in eng.tail.iter_mut().zip(n_ord - 3..) {
+        for (x, c) in term.iter_mut().zip(series) {
+            *x = c[p];
+        }
+    }
+    super::geometric::detect_tail(n_ord, &eng.tail).map(|g| g.distance)
+}
+
 /// The explicit step: the series at t0 (computed, or `known` from the
 /// previous implicit step's end), its ratio-rule length, the geometric-series
 /// test and the end residual.
@@ -609,16 +627,7 @@ fn explicit_step<P: DaeProblem + ?Sized>(
             length: a_max,
         });
     }
-    let geometric = if n_ord >= 3 {
-        for (term, p) in eng.tail.iter_mut().zip(n_ord - 3..) {
-            for (x, c) in term.iter_mut().zip(&series) {
-                *x = c[p];
-            }
-        }
-        super::geometric::detect_tail(n_ord, &eng.tail).map(|g| g.distance)
-    } else {
-        None
-    };
+    let geometric = geometric_distance(eng, &series, n_ord);
     let mut step = TimeStep {
         index,
         t0,
