@@ -76,6 +76,7 @@ pub fn run(scene: &FrictionScene, out_dir: Option<&Path>, progress: bool) -> Res
         min_step: scene.min_step,
         stop_at_singularity: scene.stop_at_singularity,
         stepping: scene.stepping,
+        output_times: scene.output_times(),
     };
     let grid = scene.output_times();
     let mut next = 0;

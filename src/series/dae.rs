@@ -69,6 +69,10 @@ pub struct DaeConfig {
     /// Explicit series, its Padé approximants, implicit (backward) series,
     /// or chosen per step.
     pub stepping: Stepping,
+    /// Times (increasing) where the caller evaluates the solution: inside
+    /// an implicit step they are solved for by a shorter implicit step from
+    /// the same start ([`TimeStep::points`]).
+    pub output_times: Vec<f64>,
 }
 
 /// How a time step uses the series ([`implicit`] argues the choice).
@@ -114,6 +118,9 @@ pub struct TimeStep {
     /// Dense output of an implicit step: per unknown, a polynomial in
     /// s = (t - t0)/length (two-point Hermite, [`implicit`]).
     pub dense: Option<Vec<Vec<f64>>>,
+    /// Inside an implicit step, at the output times: (t, y, dy/dt) from an
+    /// implicit step t0 -> t (exact to the step's tolerance, unlike `dense`).
+    pub points: Vec<(f64, Vec<f64>, Vec<f64>)>,
     /// The Padé approximants that replace the polynomial (Stepping::Pade).
     pub pade: Option<Vec<super::time_pade::ScalarPade>>,
     /// Series of the inputs u (n_diff), v (n_diff), z (n_alg), in that order,
@@ -132,6 +139,9 @@ impl TimeStep {
         if let Some(p) = &self.pade {
             return p.iter().map(|p| p.eval(t - self.origin)).collect();
         }
+        if let Some(p) = self.point(t) {
+            return p.1.clone();
+        }
         if let Some(d) = &self.dense {
             // The end point itself exactly: the next step starts there.
             if t >= self.t0 + self.length {
@@ -146,8 +156,18 @@ impl TimeStep {
             .collect()
     }
 
+    /// The point of [`TimeStep::points`] at time t, if any.
+    fn point(&self, t: f64) -> Option<&(f64, Vec<f64>, Vec<f64>)> {
+        self.points
+            .iter()
+            .find(|p| (p.0 - t).abs() <= 1e-13 * t.abs().max(1.0))
+    }
+
     /// dy/dt of every series at time t in [t0, t0 + length].
     pub fn eval_derivative(&self, t: f64) -> Vec<f64> {
+        if let Some(p) = self.point(t) {
+            return p.2.clone();
+        }
         if let Some(d) = &self.dense {
             let s = (t - self.t0) / self.length;
             return d
@@ -636,6 +656,7 @@ fn explicit_step<P: DaeProblem + ?Sized>(
         implicit: false,
         pade: None,
         dense: None,
+        points: Vec::new(),
         series,
         end_residual: 0.0,
         geometric,

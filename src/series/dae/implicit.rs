@@ -76,14 +76,16 @@ const HO_M: usize = 5;
 const HO_N: usize = 6;
 /// |A| a_exp above which a fast mode is taken to limit the explicit step.
 const STIFF: f64 = 5.0;
+/// An implicit step is kept (auto) when it reaches PAYS times further than
+/// its cost in explicit steps.
+const PAYS: f64 = 2.0;
 /// Largest growth of the implicit step from one step to the next.
 const MAX_GROWTH: f64 = 2.0;
+/// Largest (h |A|)^k admitted in the dense output's Hermite data (see
+/// [`hermite_data`]).
+const DENSE_GROWTH: f64 = 1e6;
 /// Quasi-Newton iterations per implicit try.
 const MAX_ITERATIONS: usize = 10;
-/// Largest (h |A|)^j admitted in the dense output's Hermite data: the
-/// fast part of the order-j coefficients, round-off times (h |A|)^j, stays
-/// below 1e6 ε of the state.
-const DENSE_GROWTH: f64 = 1e6;
 
 /// State of the per-step choice between the explicit and implicit steps.
 #[derive(Debug, Default)]
@@ -144,8 +146,14 @@ pub(super) fn step<P: DaeProblem + ?Sized>(
     // A singular point ahead (geometric tail of the series at t0): the
     // explicit step reports it.
     let singular = super::geometric_distance(eng, &series0, n_ord).is_some();
+    // A fast transient not yet decayed: the explicit steps resolve it (an
+    // L-stable step would damp it at once, right at its end but not inside).
+    let d0 = fast_amplitude(&series0, eng.nd, n_ord, fast);
+    let scale0 =
+        norm(u0).max(norm(&(0..eng.nd).map(|i| series0[i][1]).collect::<Vec<_>>()) * a_exp);
+    let transient = d0 > cfg.eps * scale0;
     let try_implicit = match cfg.stepping {
-        _ if singular => false,
+        _ if singular || transient => false,
         Stepping::Implicit => true,
         _ if ch.cooldown > 0 => {
             ch.cooldown -= 1;
@@ -166,17 +174,39 @@ pub(super) fn step<P: DaeProblem + ?Sized>(
             }
             match attempt(eng, ch, u0, vz0, t0, h, (m, n), index, cfg, &series0) {
                 Ok((series, ratio)) if ratio <= 1.0 => {
+                    if cfg.stepping == Stepping::Auto && h < PAYS * ch.cost(n_ord) * a_exp {
+                        // Not paying for itself: the explicit step, and
+                        // explicit steps for a while.
+                        break;
+                    }
                     let grow = (0.9 * ratio.powf(-1.0 / (m + n) as f64)).clamp(0.2, MAX_GROWTH);
                     ch.h = Some(h * grow);
                     ch.accepted += 1;
-                    if cfg.stepping == Stepping::Auto && h < ch.cost(n_ord) * a_exp {
-                        // Not paying for itself: explicit steps for a while.
-                        ch.back_off();
-                    } else {
-                        ch.failures = 0;
-                    }
+                    ch.failures = 0;
                     let end_residual = eng.output_norm(0);
-                    let dense = hermite_data(&series0, &series, h, fast, m.min(n));
+                    // Orders k of the dense output whose fast round-off at
+                    // t0, ε (h |A|)^k, stays below DENSE_GROWTH ε (k >= 1).
+                    let x = h * fast;
+                    let k = (1..=m.min(n))
+                        .take_while(|&k| x.powi(k as i32) <= DENSE_GROWTH)
+                        .last()
+                        .unwrap_or(1);
+                    let dense = hermite_data(&series0, &series, h, k);
+                    // Output times inside: solved by (I2) over t0 -> t.
+                    let mut points = Vec::new();
+                    let inside = cfg.output_times.iter().filter(|&&t| t > t0 && t < t0 + h);
+                    for &t in inside {
+                        // Kept where it passes its own error test; the
+                        // Hermite interpolant otherwise.
+                        if let Ok((p, ratio)) =
+                            attempt(eng, ch, u0, vz0, t0, t - t0, (m, n), index, cfg, &series0)
+                            && ratio <= 1.0
+                        {
+                            let y: Vec<f64> = p.iter().map(|c| c[0]).collect();
+                            let dy: Vec<f64> = p.iter().map(|c| c[1]).collect();
+                            points.push((t, y, dy));
+                        }
+                    }
                     return Ok(TimeStep {
                         index,
                         t0,
@@ -185,6 +215,7 @@ pub(super) fn step<P: DaeProblem + ?Sized>(
                         implicit: true,
                         pade: None,
                         dense: Some(dense),
+                        points,
                         series,
                         end_residual,
                         geometric: None,
@@ -211,6 +242,19 @@ pub(super) fn step<P: DaeProblem + ?Sized>(
         }
     }
     explicit_step(eng, u0, vz0, t0, index, cfg, Some(series0))
+}
+
+/// Amplitude d of a fast mode e^(λ t) (|λ| = `fast`) that would explain the
+/// last term of the differential unknowns: |u_N| = d |λ|^N / N!, i.e.
+/// d = |u_N| N! / |λ|^N (in logarithms: |λ|^N overflows). An upper bound
+/// of the fast amplitude when the last term is fast-dominated.
+fn fast_amplitude(series: &[Vec<f64>], nd: usize, n_ord: usize, fast: f64) -> f64 {
+    let last = norm(&(0..nd).map(|i| series[i][n_ord]).collect::<Vec<_>>());
+    if last == 0.0 || fast == 0.0 {
+        return 0.0;
+    }
+    let ln_fact: f64 = (2..=n_ord).map(|k| (k as f64).ln()).sum();
+    (last.ln() + ln_fact - n_ord as f64 * fast.ln()).exp()
 }
 
 /// max_i sum_j |A_ij|, A = dv/du at the loaded point (J factorized there).
@@ -405,21 +449,10 @@ fn attempt<P: DaeProblem + ?Sized>(
 /// Dense output of an implicit step: per unknown, the two-point Hermite
 /// interpolant in s = (t - t0)/h of degree 2k + 1 matching the Taylor
 /// coefficients of orders 0..k at both ends (monomial coefficients in s).
-/// k ≤ `k_max` is the largest order with (h |A|)^k ≤ DENSE_GROWTH (at
-/// least 1): inside a stiff step the high orders at the ends are fast
-/// modes' round-off, which the interpolant must not carry inside.
-fn hermite_data(
-    y0: &[Vec<f64>],
-    y1: &[Vec<f64>],
-    h: f64,
-    fast: f64,
-    k_max: usize,
-) -> Vec<Vec<f64>> {
-    let x = fast * h;
-    let k = (1..=k_max)
-        .take_while(|&j| x.powi(j as i32) <= DENSE_GROWTH)
-        .last()
-        .unwrap_or(1);
+/// Inside a stiff step the high orders at t0 carry the fast mode's
+/// round-off times (h |A|)^k: the caller keeps k where (h |A|)^k <=
+/// DENSE_GROWTH. Used between the output times solved by (I2) itself.
+fn hermite_data(y0: &[Vec<f64>], y1: &[Vec<f64>], h: f64, k: usize) -> Vec<Vec<f64>> {
     let size = 2 * k + 2;
     // Rows 0..=k: P^(j)(0)/j! = c_j; rows k+1..: P^(j)(1)/j! = sum_i C(i, j) c_i.
     let mut lu = DenseLu::default();
@@ -521,7 +554,7 @@ mod tests {
         // y = 1 + 2t - t^3 on [0.5, 0.7]: Taylor coefficients at both ends.
         let coeffs = |t: f64| vec![1.0 + 2.0 * t - t.powi(3), 2.0 - 3.0 * t * t, -3.0 * t, -1.0];
         let (t0, h) = (0.5, 0.2);
-        let c = hermite_data(&[coeffs(t0)], &[coeffs(t0 + h)], h, 0.0, 1);
+        let c = hermite_data(&[coeffs(t0)], &[coeffs(t0 + h)], h, 1);
         for s in [0.0, 0.3, 1.0] {
             let t = t0 + s * h;
             let got = crate::series::taylor::eval(&c[0], s);
