@@ -81,9 +81,6 @@ const STIFF: f64 = 5.0;
 const PAYS: f64 = 2.0;
 /// Largest growth of the implicit step from one step to the next.
 const MAX_GROWTH: f64 = 2.0;
-/// Largest (h |A|)^k admitted in the dense output's Hermite data (see
-/// [`hermite_data`]).
-const DENSE_GROWTH: f64 = 1e6;
 /// Quasi-Newton iterations per implicit try.
 const MAX_ITERATIONS: usize = 10;
 
@@ -172,7 +169,7 @@ pub(super) fn step<P: DaeProblem + ?Sized>(
             if h <= a_exp || h < cfg.min_step {
                 break;
             }
-            match attempt(eng, ch, u0, vz0, t0, h, (m, n), index, cfg, &series0) {
+            match attempt(eng, ch, u0, vz0, t0, h, (m, n), index, cfg, &series0, None) {
                 Ok((series, ratio)) if ratio <= 1.0 => {
                     if cfg.stepping == Stepping::Auto && h < PAYS * ch.cost(n_ord) * a_exp {
                         // Not paying for itself: the explicit step, and
@@ -184,24 +181,41 @@ pub(super) fn step<P: DaeProblem + ?Sized>(
                     ch.accepted += 1;
                     ch.failures = 0;
                     let end_residual = eng.output_norm(0);
-                    // Orders k of the dense output whose fast round-off at
-                    // t0, ε (h |A|)^k, stays below DENSE_GROWTH ε (k >= 1).
-                    let x = h * fast;
-                    let k = (1..=m.min(n))
-                        .take_while(|&k| x.powi(k as i32) <= DENSE_GROWTH)
-                        .last()
-                        .unwrap_or(1);
+                    // Dense output between the output times: Hermite of
+                    // orders 0..k at both ends, k = 1 in a stiff step (the
+                    // higher orders at t0 carry the fast mode times (h|A|)^k).
+                    let k = if h * fast > 1.0 { 1 } else { m.min(n) };
                     let dense = hermite_data(&series0, &series, h, k);
                     // Output times inside: solved by (I2) over t0 -> t.
                     let mut points = Vec::new();
                     let inside = cfg.output_times.iter().filter(|&&t| t > t0 && t < t0 + h);
                     for &t in inside {
-                        // Kept where it passes its own error test; the
-                        // Hermite interpolant otherwise.
-                        if let Ok((p, ratio)) =
-                            attempt(eng, ch, u0, vz0, t0, t - t0, (m, n), index, cfg, &series0)
-                            && ratio <= 1.0
-                        {
+                        // From the Hermite value (near the right root of
+                        // (I2)); kept where it passes its own error test.
+                        let s = (t - t0) / h;
+                        let guess: Vec<f64> = dense
+                            .iter()
+                            .map(|c| crate::series::taylor::eval(c, s))
+                            .collect();
+                        // Then from the tangent at t0 if that fails.
+                        let mut solve = |g: Option<&[f64]>| {
+                            attempt(
+                                eng,
+                                ch,
+                                u0,
+                                vz0,
+                                t0,
+                                t - t0,
+                                (m, n),
+                                index,
+                                cfg,
+                                &series0,
+                                g,
+                            )
+                            .ok()
+                            .filter(|r| r.1 <= 1.0)
+                        };
+                        if let Some((p, _)) = solve(Some(&guess)).or_else(|| solve(None)) {
                             let y: Vec<f64> = p.iter().map(|c| c[0]).collect();
                             let dy: Vec<f64> = p.iter().map(|c| c[1]).collect();
                             points.push((t, y, dy));
@@ -307,6 +321,7 @@ fn attempt<P: DaeProblem + ?Sized>(
     index: usize,
     cfg: &DaeConfig,
     series0: &[Vec<f64>],
+    guess: Option<&[f64]>,
 ) -> Result<(Vec<Vec<f64>>, f64)> {
     let nd = eng.nd;
     let t1 = t0 + h;
@@ -320,10 +335,15 @@ fn attempt<P: DaeProblem + ?Sized>(
         .collect();
     // Predictor: the tangent at t0 of every unknown (on the slow manifold,
     // the slow velocities).
+    // A given guess (y at t0 + h) replaces it.
     let mut u1: Vec<f64> = (0..nd).map(|i| u0[i] + h * series0[i][1]).collect();
     let mut vz1: Vec<f64> = (0..vz0.len())
         .map(|k| vz0[k] + h * series0[nd + k][1])
         .collect();
+    if let Some(y) = guess {
+        u1.copy_from_slice(&y[..nd]);
+        vz1.copy_from_slice(&y[nd..]);
+    }
     let mut mat = vec![0.0; nd * nd];
     let mut dvz = Vec::new();
     // A = dv/du at the first iterate.
@@ -347,7 +367,8 @@ fn attempt<P: DaeProblem + ?Sized>(
         let first = norm(&(0..nd).map(|i| s[i][1]).collect::<Vec<_>>());
         let scale = (first * h).max(norm(&u1));
         let tol = (0.1 * cfg.eps * scale).max(16.0 * f64::EPSILON * mag);
-        // The last update moved u1 by round-off only: G is at its floor.
+        // The last update moved u1 by round-off only: G is at its floor
+        // (if within 1e3 of the tolerance; otherwise the iteration failed).
         let stalled = last
             .as_ref()
             .is_some_and(|(du, _)| norm(du) <= 4.0 * f64::EPSILON * norm(&u1));
@@ -450,8 +471,8 @@ fn attempt<P: DaeProblem + ?Sized>(
 /// interpolant in s = (t - t0)/h of degree 2k + 1 matching the Taylor
 /// coefficients of orders 0..k at both ends (monomial coefficients in s).
 /// Inside a stiff step the high orders at t0 carry the fast mode's
-/// round-off times (h |A|)^k: the caller keeps k where (h |A|)^k <=
-/// DENSE_GROWTH. Used between the output times solved by (I2) itself.
+/// amplitude times (h |A|)^k: the caller takes k = 1 there. Used between
+/// the output times, which (I2) solves for itself.
 fn hermite_data(y0: &[Vec<f64>], y1: &[Vec<f64>], h: f64, k: usize) -> Vec<Vec<f64>> {
     let size = 2 * k + 2;
     // Rows 0..=k: P^(j)(0)/j! = c_j; rows k+1..: P^(j)(1)/j! = sum_i C(i, j) c_i.
