@@ -229,13 +229,16 @@ fn small_zeta_within_step_budget() {
 }
 
 /// (f) Issue 13: friction-plane at zeta = 1e-4 N (a stiff relaxation before
-/// contact, time constant ~1e-5 s) with the default `solver.time_step =
-/// "auto"`: the ANM within 1e-6 of diffsol BDF at rtol 1e-10 on the
+/// contact, time constant ~1e-5 s) with `solver.time_step = "auto"`: the
+/// ANM within 1e-6 of diffsol BDF at rtol 1e-10 on the
 /// positions u_x, u_y (and the forces R_N, R_T), in fewer steps than the
 /// explicit series needs (the step count of each is printed).
 #[test]
 fn small_zeta_anm_against_diffsol() {
-    let sc = friction_scene("friction-plane.toml", &[("friction.zeta", "1e-4")]);
+    let sc = friction_scene(
+        "friction-plane.toml",
+        &[("friction.zeta", "1e-4"), ("solver.time_step", "\"auto\"")],
+    );
     let a = anm_run(&sc, None, false).unwrap_or_else(|e| panic!("ANM failed: {e}"));
     assert_eq!(a.stop.reason, "end", "{:?}", a.stop);
     let b = diffsol(&sc, DiffsolMethod::Bdf, 1e-10);

@@ -128,3 +128,21 @@ fn implicit_step_follows_the_closed_form_with_steps_independent_of_tau() {
         println!("explicit: tau = {tau:.0e}: {steps} steps, max error {err:.2e}");
     }
 }
+
+/// Bad input: an unknown `solver.time_step` names the file, the key and
+/// the accepted values.
+#[test]
+fn unknown_time_step_is_named() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/friction-plane.toml");
+    let text = std::fs::read_to_string(&path)
+        .unwrap()
+        .replace("t_end = 3.0", "t_end = 3.0\ntime_step = \"rk4\"");
+    let kind = anm::scene::kind(&path, &text).unwrap();
+    let err = anm::scene::friction::load(&path, &text, kind)
+        .expect_err("rk4 is no time step")
+        .to_string();
+    println!("{err}");
+    assert!(err.contains("friction-plane.toml"), "{err}");
+    assert!(err.contains("solver.time_step"), "{err}");
+    assert!(err.contains("rk4") && err.contains("auto"), "{err}");
+}
