@@ -100,7 +100,7 @@ enum Command {
         zeta: Vec<f64>,
         /// The stiffness grid instead (issue 13, stiffness.md): friction-plane
         /// and friction-roller over --zeta x --omega, the ANM with the scene's
-        /// settings against IDA (needs --features reference); the error
+        /// settings and solver.time_step = "auto" against IDA (needs --features reference); the error
         /// target is the first of --target.
         #[arg(long)]
         stiffness: bool,
@@ -771,10 +771,12 @@ fn bench_stiffness(
     let mut paper = vec![];
     for case in cases {
         let (_, sc) = load(&scenes.join(format!("{case}.toml")))?;
-        let Some(sc) = sc.filter(|s| s.contact.is_some()) else {
+        let Some(mut sc) = sc.filter(|s| s.contact.is_some()) else {
             eprintln!("{case}: no zeta (skipped)");
             continue;
         };
+        // The grid measures the per-step choice (solver.time_step = "auto").
+        sc.stepping = anm::series::dae::Stepping::Auto;
         let base = stiffness::cell(case, &sc, target, repeat)?;
         paper.push((case.clone(), base.steps));
         for &z in zeta {
