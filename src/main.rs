@@ -114,6 +114,15 @@ enum Command {
         /// are benchmarked, each a case of its own (friction-1d has no zeta).
         #[arg(long, value_delimiter = ',', default_values_t = [1e-1, 1e-4])]
         zeta: Vec<f64>,
+        /// The stiffness grid instead (issue 13, stiffness.md): friction-plane
+        /// and friction-roller over --zeta x --omega, the ANM with the scene's
+        /// settings and solver.time_step = "auto" against IDA (needs --features reference); the error
+        /// target is the first of --target.
+        #[arg(long)]
+        stiffness: bool,
+        /// Values of omega (eq. 6) of the stiffness grid.
+        #[arg(long, value_delimiter = ',', default_values_t = [1e-1])]
+        omega: Vec<f64>,
         /// Interleaved rounds of the head-to-head.
         #[arg(long, default_value_t = 100)]
         rounds: usize,
@@ -485,14 +494,28 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
             write_matrix,
             target,
             zeta,
+            stiffness,
+            omega,
             rounds,
             instructions,
             out,
             items,
         } => {
             use anm::study::{bench, target as head};
-            for &z in &zeta {
-                anm::reference::settings::positive("zeta", z)?;
+            for &z in zeta.iter().chain(&omega) {
+                anm::reference::settings::positive("zeta and omega", z)?;
+            }
+            if stiffness {
+                bench_stiffness(
+                    &scenes,
+                    &cases,
+                    &zeta,
+                    &omega,
+                    &target,
+                    repeat,
+                    out.as_deref(),
+                )?;
+                return Ok(ExitCode::SUCCESS);
             }
             for &t in &target {
                 anm::reference::settings::positive("target", t)?;
@@ -773,6 +796,56 @@ fn sweep(
 }
 
 /// The scaling study (`anm bench --scaling 40x4,80x8,...`).
+/// `anm bench --stiffness`: the zeta x omega grid of issue 13.
+fn bench_stiffness(
+    scenes: &std::path::Path,
+    cases: &[String],
+    zeta: &[f64],
+    omega: &[f64],
+    target: &[f64],
+    repeat: usize,
+    out: Option<&std::path::Path>,
+) -> anyhow::Result<()> {
+    use anm::study::stiffness;
+    if !cfg!(feature = "reference") {
+        anyhow::bail!("--stiffness compares with IDA: build with --features reference");
+    }
+    let target = target.first().copied().unwrap_or(1e-8);
+    let mut cells = vec![];
+    let mut paper = vec![];
+    for case in cases {
+        let (_, sc) = load(&scenes.join(format!("{case}.toml")))?;
+        let Some(mut sc) = sc.filter(|s| s.contact.is_some()) else {
+            eprintln!("{case}: no zeta (skipped)");
+            continue;
+        };
+        // The grid measures the per-step choice (solver.time_step = "auto").
+        sc.stepping = anm::series::dae::Stepping::Auto;
+        let base = stiffness::cell(case, &sc, target, repeat)?;
+        paper.push((case.clone(), base.steps));
+        for &z in zeta {
+            for &w in omega {
+                let mut s = sc.clone();
+                s.friction.zeta = Some(z);
+                s.friction.omega = w;
+                let c = stiffness::cell(case, &s, target, repeat)?;
+                eprintln!(
+                    "{case} zeta={z:.0e} omega={w:.0e}: {} steps, {:.1e} from IDA",
+                    c.steps, c.deviation
+                );
+                cells.push(c);
+            }
+        }
+    }
+    let table = stiffness::markdown(&cells, &paper, target);
+    print!("{table}");
+    if let Some(dir) = out {
+        std::fs::create_dir_all(dir)?;
+        std::fs::write(dir.join("stiffness.md"), &table)?;
+    }
+    Ok(())
+}
+
 fn bench_scaling(
     template: &std::path::Path,
     sizes: &[String],

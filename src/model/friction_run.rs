@@ -7,8 +7,8 @@ use crate::error::Result;
 use crate::output::plot::{Curve, Panel, draw};
 use crate::output::{CsvStream, Stop, create_dir, write_json};
 use crate::scene::friction::{FrictionScene, InitMode};
+use crate::series::Stats;
 use crate::series::dae::{self, DaeConfig, Initialization};
-use crate::series::{Stats, taylor};
 use serde::Serialize;
 use std::path::Path;
 use std::time::Instant;
@@ -22,7 +22,8 @@ pub struct FrictionRun {
     /// Rows on the output grid (up to the stop).
     pub history: Vec<Vec<f64>>,
     /// Step ends: step, t, h (length), end residual, slip velocity,
-    /// geometric-series distance (0: none), then the history columns.
+    /// geometric-series distance (0: none), the history columns, then 1 for
+    /// an implicit step (0: explicit).
     pub steps: Vec<Vec<f64>>,
     pub order: usize,
     pub eps: f64,
@@ -40,6 +41,9 @@ pub struct FrictionRun {
     pub singular_events: Vec<(f64, f64)>,
     /// The accepted steps' series (u, v, z), for checks and dense output.
     pub series: Vec<crate::series::TimeStep>,
+    /// `solver.time_step` and what the implicit steps cost.
+    pub time_step: &'static str,
+    pub implicit: crate::series::dae::ImplicitCounts,
 }
 
 /// Solves the scene; writes the outputs into `out_dir` when given.
@@ -71,6 +75,8 @@ pub fn run(scene: &FrictionScene, out_dir: Option<&Path>, progress: bool) -> Res
         residual_tol: scene.residual_tol,
         min_step: scene.min_step,
         stop_at_singularity: scene.stop_at_singularity,
+        stepping: scene.stepping,
+        output_times: scene.output_times(),
     };
     let grid = scene.output_times();
     let mut next = 0;
@@ -115,6 +121,7 @@ pub fn run(scene: &FrictionScene, out_dir: Option<&Path>, progress: bool) -> Res
                 .into_iter()
                 .skip(1),
         );
+        row.push(f64::from(u8::from(step.implicit)));
         if let Some((_, s)) = &mut streams {
             s.row(&row)?;
         }
@@ -182,6 +189,8 @@ pub fn run(scene: &FrictionScene, out_dir: Option<&Path>, progress: bool) -> Res
         t_singular_estimate,
         singular_events: result.events.clone(),
         series,
+        time_step: scene.stepping.name(),
+        implicit: result.implicit,
     };
     if let Some(dir) = out_dir {
         write_outputs(&run, model, scene, dir)?;
@@ -191,10 +200,7 @@ pub fn run(scene: &FrictionScene, out_dir: Option<&Path>, progress: bool) -> Res
 
 /// dy/dt of every series of the step at time t.
 fn derivative(step: &crate::series::TimeStep, t: f64) -> Vec<f64> {
-    step.series
-        .iter()
-        .map(|c| taylor::eval_derivative(c, t - step.t0))
-        .collect()
+    step.eval_derivative(t)
 }
 
 /// Fits a_k = c (t* - t_k) on the last five steps (least squares on a vs t)
@@ -244,6 +250,7 @@ fn step_columns(model: &dyn FrictionModel) -> Vec<&'static str> {
         "geometric_distance",
     ];
     cols.extend(model.columns().iter().skip(1));
+    cols.push("implicit");
     cols
 }
 
@@ -284,6 +291,9 @@ struct Summary<'a> {
     columns: &'a [String],
     order: usize,
     eps: f64,
+    /// `solver.time_step`, and the implicit steps among `steps`.
+    time_step: &'a str,
+    implicit: crate::series::dae::ImplicitCounts,
     init: &'a str,
     initial_residual: f64,
     output_rows: usize,
@@ -308,6 +318,8 @@ impl<'a> From<&'a FrictionRun> for Summary<'a> {
             columns: &run.columns,
             order: run.order,
             eps: run.eps,
+            time_step: run.time_step,
+            implicit: run.implicit,
             init: &run.init,
             initial_residual: run.initial_residual,
             output_rows: run.history.len(),

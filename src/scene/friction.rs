@@ -9,12 +9,14 @@
 //! [load]      F = 1.0                      # N/s (plane, roller); friction-1d: RN (N)
 //! [initial]   mode = "newton", u0 = 0.0, v0 = 1.0
 //! [solver]    order = 20, eps = 1e-10, t_end = 3.0, on_singularity = "stop"  # or "continue"
+//!             time_step = "explicit"       # or "auto", "implicit", "pade" (series::dae::implicit)
 //! [output]    dt = 0.01
 //! ```
 
 use super::{Checker, Kind, parse};
 use crate::contact::{FrictionLaw, NormalLaw};
 use crate::error::Result;
+use crate::series::dae::Stepping;
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
 
@@ -106,6 +108,7 @@ struct RawSolver {
     residual_tol: Option<f64>,
     correct: Option<bool>,
     on_singularity: Option<String>,
+    time_step: Option<String>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -166,6 +169,9 @@ pub struct FrictionScene {
     /// Stop at the first singular point the series reveals ("stop"), or
     /// record it and go on ("continue").
     pub stop_at_singularity: bool,
+    /// Explicit, implicit or per-step choice of the time step
+    /// ([`crate::series::dae::Stepping`]).
+    pub stepping: Stepping,
     pub dt: f64,
     pub plot: bool,
 }
@@ -333,6 +339,20 @@ pub fn load(path: &Path, text: &str, kind: Kind) -> Result<FrictionScene> {
             ));
         }
     };
+    let stepping = match s.time_step.as_deref() {
+        Some("auto") => Stepping::Auto,
+        None | Some("explicit") => Stepping::Explicit,
+        Some("implicit") => Stepping::Implicit,
+        Some("pade") => Stepping::Pade,
+        Some(other) => {
+            return Err(c.fail(
+                "solver.time_step",
+                format!(
+                    "expected \"auto\", \"explicit\", \"pade\" or \"implicit\", got \"{other}\""
+                ),
+            ));
+        }
+    };
     let dt = c.positive("output.dt", raw.output.dt)?;
     if dt > t_end {
         return Err(c.fail(
@@ -368,6 +388,7 @@ pub fn load(path: &Path, text: &str, kind: Kind) -> Result<FrictionScene> {
         residual_tol,
         correct: s.correct.unwrap_or(true),
         stop_at_singularity,
+        stepping,
         dt,
         plot: raw.output.plot.unwrap_or(true),
     })

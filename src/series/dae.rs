@@ -17,6 +17,8 @@ use crate::error::{Error, Result};
 use crate::linalg::{DenseLu, norm};
 use std::time::Instant;
 
+mod implicit;
+
 /// A semi-explicit index-1 DAE written once with tape arithmetic.
 pub trait DaeProblem {
     /// Number of differential unknowns u (each with its velocity v).
@@ -64,6 +66,42 @@ pub struct DaeConfig {
     /// Stop at the first singular point the series reveals (geometric-series
     /// test); otherwise record it as an event and go on with the step.
     pub stop_at_singularity: bool,
+    /// Explicit series, its Padé approximants, implicit (backward) series,
+    /// or chosen per step.
+    pub stepping: Stepping,
+    /// Times (increasing) where the caller evaluates the solution: inside
+    /// an implicit step they are solved for by a shorter implicit step from
+    /// the same start ([`TimeStep::points`]).
+    pub output_times: Vec<f64>,
+}
+
+/// How a time step uses the series ([`implicit`] argues the choice).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Stepping {
+    /// The series at the step start, evaluated forward (eqs. 8–9): its
+    /// length is bounded by the fastest time constant.
+    Explicit,
+    /// The series at the step start, continued by its common-denominator
+    /// Padé approximants of orders N and N-1 while they agree to eps
+    /// (`pade.rs`).
+    Pade,
+    /// The series at the step end, evaluated backward to the step start
+    /// (implicit Taylor step): stable on fast decaying modes.
+    Implicit,
+    /// Explicit where the series at the step start is not limited by a
+    /// fast mode or where it is as cheap, implicit otherwise; decided per step.
+    Auto,
+}
+
+impl Stepping {
+    pub fn name(self) -> &'static str {
+        match self {
+            Stepping::Explicit => "explicit",
+            Stepping::Pade => "pade",
+            Stepping::Implicit => "implicit",
+            Stepping::Auto => "auto",
+        }
+    }
 }
 
 /// One accepted time step.
@@ -72,7 +110,21 @@ pub struct TimeStep {
     pub index: usize,
     pub t0: f64,
     pub length: f64,
-    /// Series of the inputs u (n_diff), v (n_diff), z (n_alg), in that order.
+    /// Expansion point of `series`: t0 for an explicit step, t0 + length
+    /// for an implicit one (the series at the step end, evaluated backward).
+    pub origin: f64,
+    /// Whether the step is implicit ([`implicit`]).
+    pub implicit: bool,
+    /// Dense output of an implicit step: per unknown, a polynomial in
+    /// s = (t - t0)/length (two-point Hermite, [`implicit`]).
+    pub dense: Option<Vec<Vec<f64>>>,
+    /// Inside an implicit step, at the output times: (t, y, dy/dt) from an
+    /// implicit step t0 -> t (exact to the step's tolerance, unlike `dense`).
+    pub points: Vec<(f64, Vec<f64>, Vec<f64>)>,
+    /// The Padé approximants that replace the polynomial (Stepping::Pade).
+    pub pade: Option<Vec<super::time_pade::ScalarPade>>,
+    /// Series of the inputs u (n_diff), v (n_diff), z (n_alg), in that order,
+    /// in powers of t - origin.
     pub series: Vec<Vec<f64>>,
     /// |F| at the step end before correction.
     pub end_residual: f64,
@@ -84,9 +136,54 @@ pub struct TimeStep {
 impl TimeStep {
     /// (u, v, z) at time t in [t0, t0 + length].
     pub fn eval(&self, t: f64) -> Vec<f64> {
+        if let Some(p) = &self.pade {
+            return p.iter().map(|p| p.eval(t - self.origin)).collect();
+        }
+        if let Some(p) = self.point(t) {
+            return p.1.clone();
+        }
+        if let Some(d) = &self.dense {
+            // The end point itself exactly: the next step starts there.
+            if t >= self.t0 + self.length {
+                return self.series.iter().map(|c| c[0]).collect();
+            }
+            let s = (t - self.t0) / self.length;
+            return d.iter().map(|c| taylor::eval(c, s)).collect();
+        }
         self.series
             .iter()
-            .map(|c| taylor::eval(c, t - self.t0))
+            .map(|c| taylor::eval(c, t - self.origin))
+            .collect()
+    }
+
+    /// The point of [`TimeStep::points`] at time t, if any.
+    fn point(&self, t: f64) -> Option<&(f64, Vec<f64>, Vec<f64>)> {
+        self.points
+            .iter()
+            .find(|p| (p.0 - t).abs() <= 1e-13 * t.abs().max(1.0))
+    }
+
+    /// dy/dt of every series at time t in [t0, t0 + length].
+    pub fn eval_derivative(&self, t: f64) -> Vec<f64> {
+        if let Some(p) = self.point(t) {
+            return p.2.clone();
+        }
+        if let Some(d) = &self.dense {
+            let s = (t - self.t0) / self.length;
+            return d
+                .iter()
+                .map(|c| taylor::eval_derivative(c, s) / self.length)
+                .collect();
+        }
+        if self.pade.is_some() {
+            // Central difference of the approximant (outputs only).
+            let d = 1e-6 * self.length;
+            let (a, b) = (self.eval(t + d), self.eval(t - d));
+            return a.iter().zip(b).map(|(x, y)| (x - y) / (2.0 * d)).collect();
+        }
+        self.series
+            .iter()
+            .map(|c| taylor::eval_derivative(c, t - self.origin))
             .collect()
     }
 }
@@ -107,6 +204,19 @@ pub struct DaeResult {
     pub error: Option<Error>,
     /// Initial (v, z) actually used and |F| there.
     pub initial_residual: f64,
+    pub implicit: ImplicitCounts,
+}
+
+/// What the implicit steps cost ([`implicit`]).
+#[derive(Clone, Copy, Debug, Default, serde::Serialize)]
+pub struct ImplicitCounts {
+    /// Accepted implicit steps (of `Stats::steps`).
+    pub steps: usize,
+    /// Implicit tries rejected (error test or no convergence).
+    pub rejected: usize,
+    /// Quasi-Newton iterations of implicit tries, each a consistent
+    /// initialization and a series at the try's end point.
+    pub iterations: usize,
 }
 
 /// The tape of a problem: inputs u, v, z, t in that order.
@@ -302,7 +412,25 @@ pub fn run<P: DaeProblem + ?Sized>(
     u0: &[f64],
     init: &Initialization,
     cfg: &DaeConfig,
+    on_step: impl FnMut(TimeStep, &Stats) -> Result<()>,
+) -> DaeResult {
+    let mut chooser = implicit::Chooser::default();
+    let mut r = run_with(problem, u0, init, cfg, on_step, &mut chooser);
+    r.implicit = ImplicitCounts {
+        steps: chooser.accepted,
+        rejected: chooser.rejected,
+        iterations: chooser.iterations,
+    };
+    r
+}
+
+fn run_with<P: DaeProblem + ?Sized>(
+    problem: &P,
+    u0: &[f64],
+    init: &Initialization,
+    cfg: &DaeConfig,
     mut on_step: impl FnMut(TimeStep, &Stats) -> Result<()>,
+    chooser: &mut implicit::Chooser,
 ) -> DaeResult {
     let nd = problem.n_diff();
     let na = problem.n_alg();
@@ -330,6 +458,7 @@ pub fn run<P: DaeProblem + ?Sized>(
         events: Vec::new(),
         error,
         initial_residual: r0,
+        implicit: ImplicitCounts::default(),
     };
     let mut u = u0.to_vec();
     let mut t = cfg.t0;
@@ -354,7 +483,7 @@ pub fn run<P: DaeProblem + ?Sized>(
         if t >= cfg.t_end {
             return finish_with_events(finish(eng.stats, "end", t, None, r0), events);
         }
-        match time_step(&mut eng, &u, &vz, t, index, cfg) {
+        match implicit::step(&mut eng, chooser, &u, &vz, t, index, cfg) {
             Ok(step) if step.geometric.is_some() && cfg.stop_at_singularity => {
                 // The last terms form a geometric series: a singular point
                 // lies at t0 + alpha_1, within reach of this step. Stop at the
@@ -407,19 +536,20 @@ pub fn run<P: DaeProblem + ?Sized>(
     finish(eng.stats, "max_steps", t, None, r0)
 }
 
-fn time_step<P: DaeProblem + ?Sized>(
+/// The Taylor series (u, v, z) of the solution through (u0, vz0) at t0, each
+/// of `cfg.order` + 1 terms (eqs. 8–9): J factorized at (u0, vz0, t0), one
+/// solve per order. Leaves the tape loaded at t0 (order 0) with J in `eng.lu`.
+fn series_at<P: DaeProblem + ?Sized>(
     eng: &mut Engine<P>,
     u0: &[f64],
     vz0: &[f64],
     t0: f64,
     index: usize,
-    cfg: &DaeConfig,
-) -> Result<TimeStep> {
+    n_ord: usize,
+) -> Result<Vec<Vec<f64>>> {
     let (nd, n) = (eng.nd, eng.n());
-    let n_ord = cfg.order;
     eng.load0(u0, vz0, t0);
     eng.factorize(index, t0)?;
-    let scale = 1.0 + eng.output_norm(0);
     let start = Instant::now();
     for p in 1..=n_ord {
         for i in 0..nd {
@@ -449,20 +579,66 @@ fn time_step<P: DaeProblem + ?Sized>(
         }
     }
     charge(&mut eng.stats.series_s, start);
-    let series: Vec<Vec<f64>> = (0..nd + n)
+    Ok((0..nd + n)
         .map(|i| eng.tape.input_series(i).to_vec())
-        .collect();
-    // Ratio rule a = (eps |y_1| / |y_N|)^(1/(N-1)) on y = (u, v, z).
+        .collect())
+}
+
+/// Ratio rule a = (eps |y_1| / |y_N|)^(1/(N-1)) on y = (u, v, z), capped at
+/// (1e15)^(1/N) (DESIGN §2).
+fn ratio_length(series: &[Vec<f64>], eps: f64, n_ord: usize) -> f64 {
     let term_norm = |p: usize| series.iter().map(|c| c[p] * c[p]).sum::<f64>().sqrt();
     let (n1, nn) = (term_norm(1), term_norm(n_ord));
     let cap = 1e15f64.powf(1.0 / n_ord as f64);
-    let a_max = if nn > 0.0 && n1 > 0.0 {
-        (cfg.eps * n1 / nn)
-            .powf(1.0 / (n_ord as f64 - 1.0))
-            .min(cap)
+    if nn > 0.0 && n1 > 0.0 {
+        (eps * n1 / nn).powf(1.0 / (n_ord as f64 - 1.0)).min(cap)
     } else {
         cap
+    }
+}
+
+/// Distance to a singular point when the last terms of the series form a
+/// geometric series (Cochelin–Medale test on (u, v, z)).
+fn geometric_distance<P: DaeProblem + ?Sized>(
+    eng: &mut Engine<P>,
+    series: &[Vec<f64>],
+    n_ord: usize,
+) -> Option<f64> {
+    if n_ord < 3 {
+        return None;
+    }
+    for (term, p) in eng.tail.iter_mut().zip(n_ord - 3..) {
+        for (x, c) in term.iter_mut().zip(series) {
+            *x = c[p];
+        }
+    }
+    super::geometric::detect_tail(n_ord, &eng.tail).map(|g| g.distance)
+}
+
+/// The explicit step: the series at t0 (computed, or `known` from the
+/// previous implicit step's end), its ratio-rule length, the geometric-series
+/// test and the end residual.
+fn explicit_step<P: DaeProblem + ?Sized>(
+    eng: &mut Engine<P>,
+    u0: &[f64],
+    vz0: &[f64],
+    t0: f64,
+    index: usize,
+    cfg: &DaeConfig,
+    known: Option<Vec<Vec<f64>>>,
+) -> Result<TimeStep> {
+    let nd = eng.nd;
+    let n_ord = cfg.order;
+    let series = match known {
+        Some(s) => {
+            // The tape may hold an implicit try's end point: reload t0.
+            eng.load0(u0, vz0, t0);
+            s
+        }
+        None => series_at(eng, u0, vz0, t0, index, n_ord)?,
     };
+    let scale = 1.0 + eng.output_norm(0);
+    let a_max = ratio_length(&series, cfg.eps, n_ord);
     if a_max < cfg.min_step {
         return Err(Error::StepCollapse {
             step: index,
@@ -471,25 +647,30 @@ fn time_step<P: DaeProblem + ?Sized>(
             length: a_max,
         });
     }
-    let geometric = if n_ord >= 3 {
-        for (term, p) in eng.tail.iter_mut().zip(n_ord - 3..) {
-            for (x, c) in term.iter_mut().zip(&series) {
-                *x = c[p];
-            }
-        }
-        super::geometric::detect_tail(n_ord, &eng.tail).map(|g| g.distance)
-    } else {
-        None
-    };
-    let length = a_max.min(cfg.t_end - t0);
+    let geometric = geometric_distance(eng, &series, n_ord);
     let mut step = TimeStep {
         index,
         t0,
-        length,
+        length: a_max.min(cfg.t_end - t0),
+        origin: t0,
+        implicit: false,
+        pade: None,
+        dense: None,
+        points: Vec::new(),
         series,
         end_residual: 0.0,
         geometric,
     };
+    if cfg.stepping == Stepping::Pade && geometric.is_none() {
+        let cap = (1e3 * a_max).min(cfg.t_end - t0);
+        if a_max < cap
+            && let Some((a, p)) = super::time_pade::range(&step.series, n_ord, cfg.eps, a_max, cap)
+        {
+            step.pade = Some(p);
+            step.length = a;
+        }
+    }
+    let length = step.length;
     let y = step.eval(t0 + length);
     eng.load0(&y[..nd], &y[nd..], t0 + length);
     eng.stats.residual_evaluations += 1;

@@ -16,6 +16,7 @@ pub mod stop;
 pub mod tape;
 pub mod tape_problem;
 pub mod taylor;
+pub mod time_pade;
 
 pub use continuation::{ContinuationConfig, ContinuationProblem, PathResult, PathStep};
 pub use correct::{Metric, correct_at_lambda};

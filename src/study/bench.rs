@@ -148,7 +148,7 @@ fn study_error(scene: &FrictionScene, e: crate::reference::IdaError) -> crate::E
 /// onto [`Stats`] (factorizations, linear solves, residual evaluations).
 /// The study reads the reference solvers, never the other way round
 /// (DESIGN §1).
-fn from_reference(run: crate::reference::IdaRun) -> Solution {
+pub(crate) fn from_reference(run: crate::reference::IdaRun) -> Solution {
     let c = &run.counters;
     let stats = crate::series::Stats {
         steps: c.steps as usize,
@@ -175,13 +175,13 @@ fn ida(scene: &FrictionScene, rtol: f64) -> Result<Solution> {
 }
 
 #[cfg(feature = "reference")]
-fn reference_ida(scene: &FrictionScene, rtol: f64) -> Result<crate::reference::IdaRun> {
+pub(crate) fn reference_ida(scene: &FrictionScene, rtol: f64) -> Result<crate::reference::IdaRun> {
     let settings = crate::reference::IdaSettings::new(rtol).map_err(|e| study_error(scene, e))?;
     crate::reference::solve(scene, &settings).map_err(|e| study_error(scene, e))
 }
 
 #[cfg(not(feature = "reference"))]
-fn reference_ida(scene: &FrictionScene, _rtol: f64) -> Result<crate::reference::IdaRun> {
+pub(crate) fn reference_ida(scene: &FrictionScene, _rtol: f64) -> Result<crate::reference::IdaRun> {
     Err(crate::Error::study(
         "bench",
         scene.file.display().to_string(),

@@ -13,6 +13,7 @@ pub mod pool;
 pub mod scaling;
 pub mod shell_audit;
 pub mod shell_check;
+pub mod stiffness;
 pub mod stress;
 pub mod sweep;
 pub mod target;

@@ -9,3 +9,4 @@ mod friction_1d_closed_form;
 mod plane_closed_form;
 mod reference_cli;
 mod roller_breakdown;
+mod stiff_linear;

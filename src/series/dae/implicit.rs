@@ -1,0 +1,597 @@
+//! The implicit two-point Taylor (Hermite–Obreshkov) step, and the per-step
+//! choice between it and the explicit series.
+//!
+//! Why the explicit step is bounded by stiffness: it expands the solution at
+//! t0, y(t0 + a) = sum y_p a^p. Near a slow manifold the computed terms carry
+//! a fast component d λ^p / p! (λ < 0 the fast rate, d the distance of y0 to
+//! the manifold, at least round-off: every order multiplies the round-off of
+//! the lower ones by about |λ|/p), which dominates the last orders, so the
+//! ratio rule a = (eps |y_1| / |y_N|)^(1/(N-1)) gives a ≈ 10–20/|λ| for
+//! N = 20. On friction-plane before contact |λ| ≈ k / (f |R_N|_reg g′), and
+//! the steps grow like 1/ζ. Moving y0 onto the manifold does not help: the
+//! required shift is below the round-off of y0 itself.
+//!
+//! The step used where the explicit one is stiffness-bound is the
+//! Hermite–Obreshkov formula [m/n] (Hairer & Wanner, Solving ODEs II,
+//! §IV.7 / Obreshkov 1940), written with the Taylor coefficients u0_j at t0
+//! and u1_j at t1 = t0 + h, both computed as in the explicit step (eqs. 8–9:
+//! one factorization of dF/d(v, z), one solve per order; at t1 from the
+//! consistent (v, z) at (u1, t1)):
+//!   sum_{j=0}^{n} γ(n, m, j) u1_j (-h)^j = sum_{j=0}^{m} γ(m, n, j) u0_j h^j,   (I2)
+//!   γ(m, n, j) = m! (m + n - j)! / ((m + n)! (m - j)!).
+//! On y' = λ y it gives y1 = R(λh) y0 with R the [m/n] Padé approximant of
+//! the exponential: local order m + n, A-stable, and for n = m + 1 also
+//! L-stable (R(z) → 0 as z → -∞), so a fast mode is damped whatever h |λ|.
+//! We take m = 5, n = 6 (order 11). (I2) is solved for u1 by a quasi-Newton
+//! iteration whose first matrix is that of the linear constant-coefficient
+//! case, M = sum_j γ(n, m, j) (-h A)^j with A = dv/du = -[J^-1 F_u]_v at the
+//! first iterate, then Broyden updates; each iteration costs a consistent
+//! initialization (Newton on F(u1, ., t1) = 0 from the linear prediction
+//! (v, z) + d(v, z)/du Δu1) and a series of order n at t1.
+//!
+//! Error and step length: the last term of the left side of (I2),
+//! γ(n, m, n) |u1_n| h^n, against eps max(|u1_1| h, |u1|) (eps of the
+//! explicit ratio rule; |u1| when u barely moves), on the differential
+//! unknowns only: the algebraic ones are solved consistently at t1 (as IDA's
+//! suppress-alg, docs/reference-solvers.md). Next h ∝ ratio^(-1/n), within
+//! [0.2, 4]. On a fast mode this term is about the fast amplitude at t0
+//! (u1 carries d0 R(λh)), small on the manifold, so h follows the slow
+//! solution.
+//!
+//! Dense output: the caller's output times inside the step
+//! (`DaeConfig::output_times`) are solved by (I2) from t0 (started from the
+//! interpolant below, then from the tangent at t0), kept where they pass
+//! their own error test; elsewhere, per unknown, the two-point Hermite
+//! interpolant of the Taylor coefficients of orders 0..k at both ends, k = 1
+//! in a stiff step (h |A| > 1), min(m, n) otherwise. The series at t1 alone,
+//! evaluated back to t < t1, would carry the fast terms (h |A|)^p.
+//!
+//! Candidates measured before this choice (README "Stiffness in time"):
+//! scalar Padé approximants of the explicit series (`time_pade.rs`:
+//! [N/2 / N/2] against [N/2-1 / N/2]) agree only a few fast time constants
+//! further; the one-point implicit Taylor step (m = 0, n = N: the series at
+//! t1 evaluated back to t0) is limited to h |λ| ≲ 30, where the backward sum
+//! of the fast terms, ~ e^(h|λ|) ε, reaches the state; (I2) with n ≈ 6
+//! keeps that sum polynomial, (h|λ|)^n, and is balanced by the same power
+//! on the left.
+//!
+//! Per step (`Stepping::Auto`): the series at t0 is computed as for an
+//! explicit step; its ratio-rule length a_exp and |A| (row-sum norm) say
+//! whether a fast mode limits it (|A| a_exp > 5). If so, and if no singular
+//! point is in sight (geometric test on the series at t0) and no fast
+//! transient is under way (the fast amplitude that would explain u_N,
+//! |u_N| N! / |A|^N, below eps), (I2) is tried from the last implicit length
+//! (or 4 × cost × a_exp), shrinking on rejection down to a_exp. The step is
+//! kept if it reaches PAYS = 2 times its cost (series, consistent
+//! initializations; in explicit steps) further than a_exp; otherwise the
+//! explicit step is taken and the next 8, 16, 32 ... steps are explicit.
+//! `Stepping::Implicit` skips the stiffness and cost tests. Singular points
+//! are reported by explicit steps only. With several differential unknowns,
+//! |A| is a bound and M a dense nd × nd matrix: fine for a handful.
+//!
+//! Known defect (README "Stiffness in time"): a quasi-Newton iteration that
+//! stalls at round-off is accepted, and at ζ = 1e-6 N one such step ended
+//! off the slow manifold; the round-off floor of (I2) is not estimated well
+//! enough to refuse it without refusing good stiff steps.
+
+use super::{DaeConfig, DaeProblem, Engine, Stepping, TimeStep, explicit_step, series_at};
+// (geometric_distance is reached as super::geometric_distance)
+use crate::error::{Error, Result};
+use crate::linalg::{DenseLu, norm};
+
+/// Orders (m, n) of the two-point formula (I2): L-stable (n = m + 1),
+/// local order m + n = 11 (choice measured, README "Stiffness in time").
+const HO_M: usize = 5;
+const HO_N: usize = 6;
+/// |A| a_exp above which a fast mode is taken to limit the explicit step.
+const STIFF: f64 = 5.0;
+/// An implicit step is kept (auto) when it reaches PAYS times further than
+/// its cost in explicit steps.
+const PAYS: f64 = 2.0;
+/// Largest growth of the implicit step from one step to the next.
+const MAX_GROWTH: f64 = 2.0;
+/// Quasi-Newton iterations per implicit try.
+const MAX_ITERATIONS: usize = 10;
+
+/// State of the per-step choice between the explicit and implicit steps.
+#[derive(Debug, Default)]
+pub(super) struct Chooser {
+    /// Next implicit step length (from the last accepted implicit step).
+    h: Option<f64>,
+    /// Explicit steps before the next implicit try.
+    cooldown: usize,
+    /// Consecutive implicit tries that ended explicit.
+    failures: u32,
+    /// Quasi-Newton iterations of implicit tries (accepted or not).
+    pub iterations: usize,
+    pub accepted: usize,
+    pub rejected: usize,
+}
+
+impl Chooser {
+    /// Explicit steps for 8, 16, 32 ... steps after an implicit try that
+    /// did not pay; the next try starts again from the explicit length.
+    fn back_off(&mut self) {
+        self.h = None;
+        self.cooldown = 8 << self.failures.min(10);
+        self.failures += 1;
+    }
+
+    /// Cost of an implicit step in explicit steps (series of order N):
+    /// the series at t0, then per iteration a series of order n and the
+    /// consistent initialization (about two factorizations).
+    fn cost(&self, n_ord: usize) -> f64 {
+        let per_step = if self.accepted == 0 {
+            4.0
+        } else {
+            self.iterations as f64 / self.accepted as f64
+        };
+        1.0 + per_step * (HO_N + 2) as f64 / n_ord as f64
+    }
+}
+
+/// One step from (u0, vz0) at t0: explicit or implicit as `cfg.stepping`
+/// and the series say.
+pub(super) fn step<P: DaeProblem + ?Sized>(
+    eng: &mut Engine<P>,
+    ch: &mut Chooser,
+    u0: &[f64],
+    vz0: &[f64],
+    t0: f64,
+    index: usize,
+    cfg: &DaeConfig,
+) -> Result<TimeStep> {
+    if matches!(cfg.stepping, Stepping::Explicit | Stepping::Pade) {
+        return explicit_step(eng, u0, vz0, t0, index, cfg, None);
+    }
+    let n_ord = cfg.order;
+    let series0 = series_at(eng, u0, vz0, t0, index, n_ord)?;
+    let remaining = cfg.t_end - t0;
+    let a_exp = super::ratio_length(&series0, cfg.eps, n_ord).min(remaining);
+    let fast = jacobian_size(eng);
+    // A singular point ahead (geometric tail of the series at t0): the
+    // explicit step reports it.
+    let singular = super::geometric_distance(eng, &series0, n_ord).is_some();
+    // A fast transient not yet decayed: the explicit steps resolve it (an
+    // L-stable step would damp it at once, right at its end but not inside).
+    let d0 = fast_amplitude(&series0, eng.nd, n_ord, fast);
+    let scale0 =
+        norm(u0).max(norm(&(0..eng.nd).map(|i| series0[i][1]).collect::<Vec<_>>()) * a_exp);
+    let transient = d0 > cfg.eps * scale0;
+    let try_implicit = match cfg.stepping {
+        _ if singular || transient => false,
+        Stepping::Implicit => true,
+        _ if ch.cooldown > 0 => {
+            ch.cooldown -= 1;
+            false
+        }
+        _ => a_exp < remaining && fast * a_exp > STIFF,
+    };
+    if try_implicit {
+        let (m, n) = (HO_M.min(n_ord - 1), HO_N.min(n_ord));
+        let mut h =
+            ch.h.unwrap_or(4.0 * ch.cost(n_ord) * a_exp)
+                .max(a_exp)
+                .min(remaining);
+        loop {
+            // Once tried, the implicit step is kept down to the explicit length.
+            if h <= a_exp || h < cfg.min_step {
+                break;
+            }
+            match attempt(eng, ch, u0, vz0, t0, h, (m, n), index, cfg, &series0, None) {
+                Ok((series, ratio)) if ratio <= 1.0 => {
+                    if cfg.stepping == Stepping::Auto && h < PAYS * ch.cost(n_ord) * a_exp {
+                        // Not paying for itself: the explicit step, and
+                        // explicit steps for a while.
+                        break;
+                    }
+                    let grow = (0.9 * ratio.powf(-1.0 / (m + n) as f64)).clamp(0.2, MAX_GROWTH);
+                    ch.h = Some(h * grow);
+                    ch.accepted += 1;
+                    ch.failures = 0;
+                    let end_residual = eng.output_norm(0);
+                    // Dense output between the output times: Hermite of
+                    // orders 0..k at both ends, k = 1 in a stiff step (the
+                    // higher orders at t0 carry the fast mode times (h|A|)^k).
+                    let k = if h * fast > 1.0 { 1 } else { m.min(n) };
+                    let dense = hermite_data(&series0, &series, h, k);
+                    // Output times inside: solved by (I2) over t0 -> t.
+                    let mut points = Vec::new();
+                    let inside = cfg.output_times.iter().filter(|&&t| t > t0 && t < t0 + h);
+                    for &t in inside {
+                        // From the Hermite value (near the right root of
+                        // (I2)); kept where it passes its own error test.
+                        let s = (t - t0) / h;
+                        let guess: Vec<f64> = dense
+                            .iter()
+                            .map(|c| crate::series::taylor::eval(c, s))
+                            .collect();
+                        // Then from the tangent at t0 if that fails.
+                        let mut solve = |g: Option<&[f64]>| {
+                            attempt(
+                                eng,
+                                ch,
+                                u0,
+                                vz0,
+                                t0,
+                                t - t0,
+                                (m, n),
+                                index,
+                                cfg,
+                                &series0,
+                                g,
+                            )
+                            .ok()
+                            .filter(|r| r.1 <= 1.0)
+                        };
+                        if let Some((p, _)) = solve(Some(&guess)).or_else(|| solve(None)) {
+                            let y: Vec<f64> = p.iter().map(|c| c[0]).collect();
+                            let dy: Vec<f64> = p.iter().map(|c| c[1]).collect();
+                            points.push((t, y, dy));
+                        }
+                    }
+                    return Ok(TimeStep {
+                        index,
+                        t0,
+                        length: h,
+                        origin: t0 + h,
+                        implicit: true,
+                        pade: None,
+                        dense: Some(dense),
+                        points,
+                        series,
+                        end_residual,
+                        geometric: None,
+                    });
+                }
+                Ok((_, ratio)) => {
+                    ch.rejected += 1;
+                    eng.stats.step_cuts += 1;
+                    h *= (0.9 * ratio.powf(-1.0 / (m + n) as f64)).clamp(0.2, 0.9);
+                }
+                Err(_) => {
+                    // The quasi-Newton iteration or the consistent
+                    // initialization failed: the predictor was too far.
+                    ch.rejected += 1;
+                    eng.stats.step_cuts += 1;
+                    h *= 0.25;
+                }
+            }
+        }
+        if cfg.stepping == Stepping::Auto {
+            ch.back_off();
+        } else {
+            ch.h = None;
+        }
+    }
+    explicit_step(eng, u0, vz0, t0, index, cfg, Some(series0))
+}
+
+/// Amplitude d of a fast mode e^(λ t) (|λ| = `fast`) that would explain the
+/// last term of the differential unknowns: |u_N| = d |λ|^N / N!, i.e.
+/// d = |u_N| N! / |λ|^N (in logarithms: |λ|^N overflows). An upper bound
+/// of the fast amplitude when the last term is fast-dominated.
+fn fast_amplitude(series: &[Vec<f64>], nd: usize, n_ord: usize, fast: f64) -> f64 {
+    let last = norm(&(0..nd).map(|i| series[i][n_ord]).collect::<Vec<_>>());
+    if last == 0.0 || fast == 0.0 {
+        return 0.0;
+    }
+    let ln_fact: f64 = (2..=n_ord).map(|k| (k as f64).ln()).sum();
+    (last.ln() + ln_fact - n_ord as f64 * fast.ln()).exp()
+}
+
+/// max_i sum_j |A_ij|, A = dv/du at the loaded point (J factorized there).
+fn jacobian_size<P: DaeProblem + ?Sized>(eng: &mut Engine<P>) -> f64 {
+    let (a, _) = ode_jacobian(eng);
+    row_sum_norm(&a, eng.nd)
+}
+
+/// max_i sum_j |A_ij| of an nd × nd row-major matrix.
+fn row_sum_norm(a: &[f64], nd: usize) -> f64 {
+    (0..nd)
+        .map(|i| (0..nd).map(|j| a[i * nd + j].abs()).sum::<f64>())
+        .fold(0.0, f64::max)
+}
+
+/// d(v, z)/du = -J^-1 F_u at the loaded point (J already in `eng.lu`):
+/// returns A = dv/du (nd × nd, row-major) and d(v, z)/du (n × nd, row-major).
+fn ode_jacobian<P: DaeProblem + ?Sized>(eng: &mut Engine<P>) -> (Vec<f64>, Vec<f64>) {
+    let (nd, n) = (eng.nd, eng.n());
+    let cols: Vec<usize> = (0..nd).collect();
+    let tangents = eng.tape.node_tangents(&cols);
+    let mut dvz = vec![0.0; n * nd];
+    let mut col = vec![0.0; n];
+    for j in 0..nd {
+        for (r, c) in col.iter_mut().enumerate() {
+            *c = -eng.tape.jacobian_entry(&tangents, r, j);
+        }
+        if !eng.lu.solve_in_place(&mut col) {
+            col.fill(f64::NAN);
+        }
+        eng.stats.solves += 1;
+        for r in 0..n {
+            dvz[r * nd + j] = col[r];
+        }
+    }
+    (dvz[..nd * nd].to_vec(), dvz)
+}
+
+/// Solves (I2) for a step of length h. Returns the series (order n) at
+/// t0 + h and the error ratio (accept at ≤ 1).
+#[allow(clippy::too_many_arguments)]
+fn attempt<P: DaeProblem + ?Sized>(
+    eng: &mut Engine<P>,
+    ch: &mut Chooser,
+    u0: &[f64],
+    vz0: &[f64],
+    t0: f64,
+    h: f64,
+    (m, n): (usize, usize),
+    index: usize,
+    cfg: &DaeConfig,
+    series0: &[Vec<f64>],
+    guess: Option<&[f64]>,
+) -> Result<(Vec<Vec<f64>>, f64)> {
+    let nd = eng.nd;
+    let t1 = t0 + h;
+    // Right side of (I2): sum_j γ(m, n, j) u0_j h^j.
+    let rhs: Vec<f64> = (0..nd)
+        .map(|i| {
+            (0..=m)
+                .map(|j| gamma(m, n, j) * series0[i][j] * h.powi(j as i32))
+                .sum()
+        })
+        .collect();
+    // Predictor: the tangent at t0 of every unknown (on the slow manifold,
+    // the slow velocities).
+    // A given guess (y at t0 + h) replaces it.
+    let mut u1: Vec<f64> = (0..nd).map(|i| u0[i] + h * series0[i][1]).collect();
+    let mut vz1: Vec<f64> = (0..vz0.len())
+        .map(|k| vz0[k] + h * series0[nd + k][1])
+        .collect();
+    if let Some(y) = guess {
+        u1.copy_from_slice(&y[..nd]);
+        vz1.copy_from_slice(&y[nd..]);
+    }
+    let mut mat = vec![0.0; nd * nd];
+    let mut dvz = Vec::new();
+    // A = dv/du at the first iterate.
+    let mut a: Vec<f64> = Vec::new();
+    let mut lu = DenseLu::default();
+    let mut last: Option<(Vec<f64>, Vec<f64>)> = None;
+    for _ in 0..MAX_ITERATIONS {
+        eng.newton(&u1, &mut vz1, t1, cfg.newton_tol, index)?;
+        let s = series_at(eng, &u1, &vz1, t1, index, n)?;
+        ch.iterations += 1;
+        // G(u1) of (I2), and the magnitude of its terms (its round-off floor).
+        let mut r = vec![0.0; nd];
+        let mut mag = 0.0f64;
+        for i in 0..nd {
+            let terms = (0..=n).map(|j| gamma(n, m, j) * s[i][j] * (-h).powi(j as i32));
+            r[i] = terms.clone().sum::<f64>() - rhs[i];
+            mag = mag.max(terms.map(f64::abs).sum::<f64>());
+        }
+        // Scale of the local error: the first-order increment, or |u1|
+        // itself when u barely moves (a relative tolerance per step).
+        let first = norm(&(0..nd).map(|i| s[i][1]).collect::<Vec<_>>());
+        let scale = (first * h).max(norm(&u1));
+        let tol = (0.1 * cfg.eps * scale).max(16.0 * f64::EPSILON * mag);
+        // The last update moved u1 by round-off only: G is at its floor
+        // (if within 1e3 of the tolerance; otherwise the iteration failed).
+        let stalled = last
+            .as_ref()
+            .is_some_and(|(du, _)| norm(du) <= 4.0 * f64::EPSILON * norm(&u1));
+        if a.is_empty() {
+            let (a1, d) = ode_jacobian(eng);
+            dvz = d;
+            mat = two_point_matrix(&a1, nd, h, n, m);
+            a = a1;
+        }
+        if norm(&r) <= tol || stalled {
+            // Local error: u1 against the [m-1/n] formula (order m + n - 1,
+            // also L-stable), err = |M'^-1 G'(u1)| with M' its matrix of the
+            // linear case. Fast modes enter G' as in G, damped by M'.
+            let mut g = vec![0.0; nd];
+            for i in 0..nd {
+                g[i] = (0..=n)
+                    .map(|j| gamma(n, m - 1, j) * s[i][j] * (-h).powi(j as i32))
+                    .sum::<f64>()
+                    - (0..m)
+                        .map(|j| gamma(m - 1, n, j) * series0[i][j] * h.powi(j as i32))
+                        .sum::<f64>();
+            }
+            let mp = two_point_matrix(&a, nd, h, n, m - 1);
+            lu.factorize(nd, |i, j| mp[i * nd + j]);
+            if !lu.solve_in_place(&mut g) {
+                g.fill(f64::INFINITY);
+            }
+            let err = norm(&g);
+            let mut ratio = if err == 0.0 {
+                0.0
+            } else {
+                err / (cfg.eps * scale + f64::MIN_POSITIVE)
+            };
+            // The algebraic unknowns (and velocities) that the fast mode does
+            // not reach: the same formula defect on their own series, so that
+            // an event only they feel (a contact closing) is not stepped over.
+            // Trusted where their fast round-off content,
+            // |d y_k/du| ε |u1| (h |A|)^(m-1), is below 0.1 eps of their scale.
+            let x = h * row_sum_norm(&a, nd);
+            for k in 0..s.len() - nd {
+                let y = &s[nd + k];
+                let y0 = &series0[nd + k];
+                let scale_k = (y[1] * h).abs().max(y[0].abs());
+                let coupling: f64 = (0..nd).map(|j| dvz[k * nd + j].abs()).sum();
+                let fast = coupling * f64::EPSILON * norm(&u1) * x.powi(m as i32 - 1);
+                if !(fast <= 0.1 * cfg.eps * scale_k) {
+                    continue;
+                }
+                let defect = (0..=n)
+                    .map(|j| gamma(n, m - 1, j) * y[j] * (-h).powi(j as i32))
+                    .sum::<f64>()
+                    - (0..m)
+                        .map(|j| gamma(m - 1, n, j) * y0[j] * h.powi(j as i32))
+                        .sum::<f64>();
+                ratio = ratio.max(defect.abs() / (cfg.eps * scale_k + f64::MIN_POSITIVE));
+            }
+            return Ok((s, ratio));
+        }
+        if !r.iter().all(|x| x.is_finite()) {
+            break;
+        }
+        if let Some((du, r_old)) = &last {
+            // Broyden: M += (ΔG - M Δu) Δuᵀ / (Δuᵀ Δu).
+            let dd: f64 = du.iter().map(|x| x * x).sum();
+            if dd > 0.0 {
+                for i in 0..nd {
+                    let mdu: f64 = (0..nd).map(|k| mat[i * nd + k] * du[k]).sum();
+                    let y = r[i] - r_old[i] - mdu;
+                    for j in 0..nd {
+                        mat[i * nd + j] += y * du[j] / dd;
+                    }
+                }
+            }
+        }
+        lu.factorize(nd, |i, j| mat[i * nd + j]);
+        let mut du: Vec<f64> = r.iter().map(|x| -x).collect();
+        if !lu.solve_in_place(&mut du) || !du.iter().all(|x| x.is_finite()) {
+            break;
+        }
+        for i in 0..nd {
+            u1[i] += du[i];
+        }
+        // Linear prediction of the consistent (v, z) for the next iterate.
+        for (k, x) in vz1.iter_mut().enumerate() {
+            *x += (0..nd).map(|j| dvz[k * nd + j] * du[j]).sum::<f64>();
+        }
+        last = Some((du, r));
+    }
+    Err(Error::NoConvergence {
+        step: index,
+        param: "t",
+        at: t1,
+        iterations: MAX_ITERATIONS,
+        residual: f64::NAN,
+        tolerance: cfg.eps,
+    })
+}
+
+/// Dense output of an implicit step: per unknown, the two-point Hermite
+/// interpolant in s = (t - t0)/h of degree 2k + 1 matching the Taylor
+/// coefficients of orders 0..k at both ends (monomial coefficients in s).
+/// Inside a stiff step the high orders at t0 carry the fast mode's
+/// amplitude times (h |A|)^k: the caller takes k = 1 there. Used between
+/// the output times, which (I2) solves for itself.
+fn hermite_data(y0: &[Vec<f64>], y1: &[Vec<f64>], h: f64, k: usize) -> Vec<Vec<f64>> {
+    let size = 2 * k + 2;
+    // Rows 0..=k: P^(j)(0)/j! = c_j; rows k+1..: P^(j)(1)/j! = sum_i C(i, j) c_i.
+    let mut lu = DenseLu::default();
+    lu.factorize(size, |r, c| {
+        if r <= k {
+            f64::from(u8::from(r == c))
+        } else {
+            binomial(c, r - k - 1)
+        }
+    });
+    y0.iter()
+        .zip(y1)
+        .map(|(a, b)| {
+            let mut rhs: Vec<f64> = (0..=k)
+                .map(|j| a[j] * h.powi(j as i32))
+                .chain((0..=k).map(|j| b[j] * h.powi(j as i32)))
+                .collect();
+            lu.solve_in_place(&mut rhs);
+            rhs
+        })
+        .collect()
+}
+
+/// dG/du1 of (I2) [m/n] in the linear case y' = A y: sum_j γ(n, m, j) (-h A)^j
+/// (nd × nd, row-major), by Horner.
+fn two_point_matrix(a: &[f64], nd: usize, h: f64, n: usize, m: usize) -> Vec<f64> {
+    let mut mat = identity(nd);
+    for p in (1..=n).rev() {
+        let mut next = identity(nd);
+        let c = -h * gamma(n, m, p) / gamma(n, m, p - 1);
+        for i in 0..nd {
+            for j in 0..nd {
+                let acc: f64 = (0..nd).map(|k| a[i * nd + k] * mat[k * nd + j]).sum();
+                next[i * nd + j] += c * acc;
+            }
+        }
+        mat = next;
+    }
+    mat
+}
+
+/// C(i, j) (0 when j > i).
+fn binomial(i: usize, j: usize) -> f64 {
+    if j > i {
+        return 0.0;
+    }
+    (0..j).map(|l| (i - l) as f64 / (j - l) as f64).product()
+}
+
+fn identity(n: usize) -> Vec<f64> {
+    let mut m = vec![0.0; n * n];
+    for i in 0..n {
+        m[i * n + i] = 1.0;
+    }
+    m
+}
+
+/// γ(m, n, j) = m! (m + n - j)! / ((m + n)! (m - j)!), the weight of u_j h^j
+/// (Taylor coefficients) in the Hermite–Obreshkov [m/n] formula (I2).
+fn gamma(m: usize, n: usize, j: usize) -> f64 {
+    if j > m {
+        return 0.0;
+    }
+    (0..j)
+        .map(|i| (m - i) as f64 / (m + n - i) as f64)
+        .product()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn two_point_weights_give_the_pade_approximant_of_exp() {
+        // On y' = λ y the formula gives y1/y0 = P_m(z)/Q_n(-z), the [m/n]
+        // Padé approximant of e^z (z = λ h): compare at z = -0.3.
+        let (m, n, z) = (5usize, 6usize, -0.3f64);
+        let fact = |k: usize| (1..=k).map(|x| x as f64).product::<f64>();
+        let p: f64 = (0..=m)
+            .map(|j| gamma(m, n, j) * z.powi(j as i32) / fact(j))
+            .sum();
+        let q: f64 = (0..=n)
+            .map(|j| gamma(n, m, j) * (-z).powi(j as i32) / fact(j))
+            .sum();
+        assert!((p / q - z.exp()).abs() < 1e-13, "{} vs {}", p / q, z.exp());
+        // L-stable: |R(z)| -> 0 as z -> -inf (degree m < n).
+        let z = -1e8f64;
+        let p: f64 = (0..=m)
+            .map(|j| gamma(m, n, j) * z.powi(j as i32) / fact(j))
+            .sum();
+        let q: f64 = (0..=n)
+            .map(|j| gamma(n, m, j) * (-z).powi(j as i32) / fact(j))
+            .sum();
+        assert!((p / q).abs() < 1e-7);
+    }
+
+    #[test]
+    fn hermite_data_interpolates_a_polynomial() {
+        // y = 1 + 2t - t^3 on [0.5, 0.7]: Taylor coefficients at both ends.
+        let coeffs = |t: f64| vec![1.0 + 2.0 * t - t.powi(3), 2.0 - 3.0 * t * t, -3.0 * t, -1.0];
+        let (t0, h) = (0.5, 0.2);
+        let c = hermite_data(&[coeffs(t0)], &[coeffs(t0 + h)], h, 1);
+        for s in [0.0, 0.3, 1.0] {
+            let t = t0 + s * h;
+            let got = crate::series::taylor::eval(&c[0], s);
+            assert!(
+                (got - (1.0 + 2.0 * t - t.powi(3))).abs() < 1e-14,
+                "{s}: {got}"
+            );
+        }
+    }
+}
