@@ -9,5 +9,6 @@ mod derivatives_fd;
 mod linear_macneal_harder;
 mod nonlinear_cantilevers;
 mod patch_macneal_harder;
+mod plate_buckling_dolfinx;
 mod step_cost;
 mod verification_scenes;
