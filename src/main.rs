@@ -50,6 +50,12 @@ enum Command {
         /// Number of modes.
         #[arg(long, default_value_t = 4)]
         modes: usize,
+        /// Instead: locate the path's first critical point by the ANM and by
+        /// Newton load increments of this size with bisection on the
+        /// tangent's negative pivots to 1e-6 (the incremental codes' way),
+        /// and print what each cost (critical.md with -o).
+        #[arg(long, value_name = "INCREMENT")]
+        locate: Option<f64>,
         #[arg(short, long, value_name = "DIR")]
         out: Option<PathBuf>,
     },
@@ -685,9 +691,25 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
             scene,
             lambda,
             modes,
+            locate,
             out,
         } => {
             let sc = anm::scene::shell::load(&scene)?;
+            if let Some(increment) = locate {
+                use anm::study::critical_cost;
+                anm::reference::settings::positive("locate", increment)?;
+                let rows = [
+                    critical_cost::anm(&sc)?,
+                    critical_cost::newton_bisection(&sc, increment, 1e-6)?,
+                ];
+                let table = critical_cost::table(&scene.display().to_string(), &rows);
+                print!("{table}");
+                if let Some(d) = out {
+                    std::fs::create_dir_all(&d)?;
+                    std::fs::write(d.join("critical.md"), &table)?;
+                }
+                return Ok(ExitCode::SUCCESS);
+            }
             let report = anm::study::buckle::buckle(&sc, lambda, modes, out.as_deref())
                 .with_context(|| format!("buckling analysis of {}", scene.display()))?;
             print!("{}", anm::study::buckle::table(&report));

@@ -8,6 +8,7 @@ pub mod bench;
 pub mod bench_shell;
 pub mod buckle;
 pub mod check;
+pub mod critical_cost;
 pub mod factor;
 pub mod pool;
 pub mod scaling;

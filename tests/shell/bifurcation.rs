@@ -326,3 +326,28 @@ fn bad_branch_keys_and_an_unstable_buckling_state_are_clear_errors() {
     println!("{msg}");
     assert!(msg.contains("negative pivot"), "{msg}");
 }
+
+/// The cost comparison of issue 14 item 7 (`anm buckle --locate`): Newton
+/// load increments with bisection on the negative pivots, an independent
+/// locator, finds the Euler column's bifurcation where the ANM locates it
+/// on its series (measured: 1.000967026 and 1.000967174, 1.5e-7 apart, the
+/// bisection's bracket 7.6e-7; 56 and 11 factorizations).
+#[test]
+fn newton_bisection_and_the_anm_locate_the_same_euler_load() {
+    use anm::study::critical_cost;
+    let sc = scene("euler-column");
+    let a = critical_cost::anm(&sc).expect("ANM");
+    let n = critical_cost::newton_bisection(&sc, 0.1, 1e-6).expect("Newton");
+    print!(
+        "{}",
+        critical_cost::table("euler-column", &[a.clone(), n.clone()])
+    );
+    assert!(n.bracket <= 1e-6 * n.lambda);
+    assert!(
+        (a.lambda - n.lambda).abs() <= 1e-6 * a.lambda,
+        "{} vs {}",
+        a.lambda,
+        n.lambda
+    );
+    assert!((n.lambda - 1.0).abs() <= 5e-3);
+}

@@ -1,0 +1,158 @@
+//! Cost of locating a critical point (issue 14, item 7): the ANM, which
+//! finds it between two step ends and locates it on the series of the step
+//! that holds it ([`crate::series::bifurcation`]), against the way of
+//! incremental Newton codes (Abaqus, "Unstable collapse and postbuckling
+//! analysis"; Crisfield vol. 2 §21): load increments of fixed size, each
+//! converged by full Newton at fixed lambda, the stability indicator (the
+//! negative pivots of the tangent's LDLᵀ) checked at every converged
+//! point, and, once it changes, bisection in lambda (a Newton solve and a
+//! factorization per halving) until the bracket is below `tol` relative.
+//!
+//! Both use the scene's model, residual, tangent and linear solver, so the
+//! factorization counts compare the methods. Symmetric tangents only (the
+//! indicator needs the inertia); a non-symmetric tangent is an error.
+
+use crate::error::{Error, Result};
+use crate::linalg::LinearSolver;
+use crate::run::build::build_model;
+use crate::run::run_loaded;
+use crate::scene::shell::ShellScene;
+use crate::series::continuation::factorize;
+use crate::series::correct::{Metric, correct_at_lambda};
+use crate::series::{ContinuationProblem, Stats};
+use serde::Serialize;
+use std::time::Instant;
+
+/// One method's location of the first critical point.
+#[derive(Clone, Debug, Serialize)]
+pub struct Location {
+    pub method: String,
+    pub lambda: f64,
+    /// Width of the final bracket in lambda (0 where the method gives none).
+    pub bracket: f64,
+    /// Every factorization made up to the location (steps, corrections,
+    /// indicator and location).
+    pub factorizations: usize,
+    pub wall_s: f64,
+}
+
+/// The ANM run of the scene: its first `bifurcation` or `limit_point`
+/// event, with the factorizations of the steps before it and of its
+/// location.
+pub fn anm(scene: &ShellScene) -> Result<Location> {
+    let start = Instant::now();
+    let mut sc = scene.clone();
+    sc.output.plot = false;
+    let r = run_loaded(&sc, None, false)?;
+    let e = r
+        .events
+        .iter()
+        .find(|e| e.kind == "bifurcation" || e.kind == "limit_point")
+        .ok_or_else(|| no_critical_point(scene, "the ANM path"))?;
+    Ok(Location {
+        method: "ANM (location on the step's series)".into(),
+        lambda: e.lambda,
+        bracket: e.bracket,
+        // One factorization per step up to the one that holds the point
+        // (plus the corrections made on the way, counted by the run only
+        // as a total), then the location's own.
+        factorizations: e.step + e.factorizations,
+        wall_s: start.elapsed().as_secs_f64(),
+    })
+}
+
+/// Newton increments of `increment` in lambda and bisection on the
+/// negative-pivot count (module docs) to `tol` relative.
+pub fn newton_bisection(scene: &ShellScene, increment: f64, tol: f64) -> Result<Location> {
+    let start = Instant::now();
+    let mut model = build_model(scene)?;
+    model.length_scale = scene.length_scale;
+    let cfg = &scene.solver;
+    let metric = Metric::for_problem(&model, cfg.lambda_end.abs())?;
+    let mut lu = LinearSolver::new(cfg.linear);
+    let mut stats = Stats::default();
+    let n = model.ndof();
+    let (_, r_lambda) = model.tangent(&vec![0.0; n], 0.0)?;
+    let scale = metric.residual_norm(&r_lambda).max(f64::MIN_POSITIVE);
+    let newton_tol = cfg.residual_tol;
+    let mut indicator = |model: &mut _, u: &[f64], l: f64, stats: &mut Stats| -> Result<usize> {
+        let (k, _) = ContinuationProblem::tangent(model, u, l)?;
+        let f = factorize(&mut lu, &k, stats, 0, l)?;
+        f.inertia().map(|i| i.0).ok_or_else(|| Error::Invalid {
+            file: scene.file.clone(),
+            key: "solver".into(),
+            problem: format!(
+                "the tangent at lambda = {l} is not symmetric: no negative-pivot count to bisect on"
+            ),
+        })
+    };
+    let count0 = indicator(&mut model, &vec![0.0; n], 0.0, &mut stats)?;
+    let mut solver = LinearSolver::new(cfg.linear);
+    let mut solve = |model: &mut _, u: &[f64], l: f64, stats: &mut Stats| -> Result<Vec<f64>> {
+        correct_at_lambda(
+            model,
+            u.to_vec(),
+            l,
+            newton_tol,
+            scale,
+            &metric,
+            cfg.max_corrections.max(25),
+            &mut solver,
+            stats,
+            0,
+        )
+        .map(|(u, _)| u)
+    };
+    // Increments until the indicator changes.
+    let (mut a, mut ua) = (0.0, vec![0.0; n]);
+    let mut b = increment;
+    loop {
+        if b > cfg.lambda_end.abs() * (1.0 + 1e-12) {
+            return Err(no_critical_point(scene, "the Newton increments"));
+        }
+        let ub = solve(&mut model, &ua, b, &mut stats)?;
+        if indicator(&mut model, &ub, b, &mut stats)? != count0 {
+            break;
+        }
+        (a, ua) = (b, ub);
+        b += increment;
+    }
+    while b - a > tol * b.abs() {
+        let m = 0.5 * (a + b);
+        let um = solve(&mut model, &ua, m, &mut stats)?;
+        if indicator(&mut model, &um, m, &mut stats)? == count0 {
+            (a, ua) = (m, um);
+        } else {
+            b = m;
+        }
+    }
+    Ok(Location {
+        method: format!("Newton, increments {increment}, bisection on the negative pivots"),
+        lambda: 0.5 * (a + b),
+        bracket: b - a,
+        factorizations: stats.factorizations,
+        wall_s: start.elapsed().as_secs_f64(),
+    })
+}
+
+fn no_critical_point(scene: &ShellScene, by: &str) -> Error {
+    Error::Invalid {
+        file: scene.file.clone(),
+        key: "solver.lambda_end".into(),
+        problem: format!("{by} found no critical point up to lambda_end"),
+    }
+}
+
+/// The markdown table of locations of one scene.
+pub fn table(scene: &str, rows: &[Location]) -> String {
+    let mut s = format!(
+        "\n### {scene}\n\n| method | located lambda | bracket | factorizations | wall (s) |\n|---|---|---|---|---|\n"
+    );
+    for r in rows {
+        s += &format!(
+            "| {} | {:.9} | {:.1e} | {} | {:.3} |\n",
+            r.method, r.lambda, r.bracket, r.factorizations, r.wall_s
+        );
+    }
+    s
+}
