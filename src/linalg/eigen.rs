@@ -221,6 +221,15 @@ pub fn pencil(
     ))
 }
 
+/// y = A⁻¹ x of an inverse iteration; a non-finite solve is an error.
+fn inverse_step(a: &Factorization, x: &[f64]) -> Result<Vec<f64>, String> {
+    let y = a.solve(x);
+    if y.iter().any(|v| !v.is_finite()) {
+        return Err("non-finite solve in inverse iteration (singular matrix)".into());
+    }
+    Ok(y)
+}
+
 /// `start` (or a fixed vector when it is absent, empty or of the wrong
 /// length), normalized.
 fn unit_start(start: Option<&[f64]>, n: usize) -> Vec<f64> {
@@ -249,10 +258,7 @@ pub fn smallest_eigenvalue(
     let mut x = unit_start(start, n);
     let mut kappa = f64::NAN;
     for it in 1..=max_iter {
-        let mut y = a.solve(&x);
-        if y.iter().any(|v| !v.is_finite()) {
-            return Err("non-finite solve in inverse iteration (singular matrix)".into());
-        }
+        let mut y = inverse_step(a, &x)?;
         let s = norm(&y);
         y.iter_mut().for_each(|v| *v /= s);
         let ay = a_mul(&y);
@@ -282,10 +288,7 @@ pub fn nearest_real_eigenvalue(
     let reference = x.clone();
     let mut kappa = f64::NAN;
     for it in 1..=max_iter {
-        let y = a.solve(&x);
-        if y.iter().any(|v| !v.is_finite()) {
-            return Err("non-finite solve in inverse iteration (singular matrix)".into());
-        }
+        let y = inverse_step(a, &x)?;
         let next = 1.0 / dot(&x, &y);
         let s = norm(&y) * dot(&y, &reference).signum();
         x = y.iter().map(|v| v / s).collect();

@@ -72,37 +72,44 @@ pub fn newton_bisection(scene: &ShellScene, increment: f64, tol: f64) -> Result<
     let mut lu = LinearSolver::new(cfg.linear);
     let mut stats = Stats::default();
     let n = model.ndof();
-    let (_, r_lambda) = model.tangent(&vec![0.0; n], 0.0)?;
+    let not_symmetric = |l: f64| Error::Invalid {
+        file: scene.file.clone(),
+        key: "solver".into(),
+        problem: format!(
+            "the tangent at lambda = {l} is not symmetric: no negative-pivot count to bisect on"
+        ),
+    };
+    let (k0, r_lambda) = model.tangent(&vec![0.0; n], 0.0)?;
     let scale = metric.residual_norm(&r_lambda).max(f64::MIN_POSITIVE);
+    let count0 = factorize(&mut lu, &k0, &mut stats, 0, 0.0)?
+        .inertia()
+        .map(|i| i.0)
+        .ok_or_else(|| not_symmetric(0.0))?;
+    // The negative pivots of the tangent at (u, l).
+    let indicator =
+        |model: &mut _, lu: &mut _, u: &[f64], l: f64, stats: &mut Stats| -> Result<usize> {
+            let (k, _) = ContinuationProblem::tangent(model, u, l)?;
+            let f = factorize(lu, &k, stats, 0, l)?;
+            f.inertia().map(|i| i.0).ok_or_else(|| not_symmetric(l))
+        };
     let newton_tol = cfg.residual_tol;
-    let mut indicator = |model: &mut _, u: &[f64], l: f64, stats: &mut Stats| -> Result<usize> {
-        let (k, _) = ContinuationProblem::tangent(model, u, l)?;
-        let f = factorize(&mut lu, &k, stats, 0, l)?;
-        f.inertia().map(|i| i.0).ok_or_else(|| Error::Invalid {
-            file: scene.file.clone(),
-            key: "solver".into(),
-            problem: format!(
-                "the tangent at lambda = {l} is not symmetric: no negative-pivot count to bisect on"
-            ),
-        })
-    };
-    let count0 = indicator(&mut model, &vec![0.0; n], 0.0, &mut stats)?;
-    let mut solver = LinearSolver::new(cfg.linear);
-    let mut solve = |model: &mut _, u: &[f64], l: f64, stats: &mut Stats| -> Result<Vec<f64>> {
-        correct_at_lambda(
-            model,
-            u.to_vec(),
-            l,
-            newton_tol,
-            scale,
-            &metric,
-            cfg.max_corrections.max(25),
-            &mut solver,
-            stats,
-            0,
-        )
-        .map(|(u, _)| u)
-    };
+    // Newton and the indicator share one solver (one symbolic analysis).
+    let solve =
+        |model: &mut _, lu: &mut _, u: &[f64], l: f64, stats: &mut Stats| -> Result<Vec<f64>> {
+            correct_at_lambda(
+                model,
+                u.to_vec(),
+                l,
+                newton_tol,
+                scale,
+                &metric,
+                cfg.max_corrections.max(25),
+                lu,
+                stats,
+                0,
+            )
+            .map(|(u, _)| u)
+        };
     // Increments until the indicator changes.
     let (mut a, mut ua) = (0.0, vec![0.0; n]);
     let mut b = increment;
@@ -110,8 +117,8 @@ pub fn newton_bisection(scene: &ShellScene, increment: f64, tol: f64) -> Result<
         if b > cfg.lambda_end.abs() * (1.0 + 1e-12) {
             return Err(no_critical_point(scene, "the Newton increments"));
         }
-        let ub = solve(&mut model, &ua, b, &mut stats)?;
-        if indicator(&mut model, &ub, b, &mut stats)? != count0 {
+        let ub = solve(&mut model, &mut lu, &ua, b, &mut stats)?;
+        if indicator(&mut model, &mut lu, &ub, b, &mut stats)? != count0 {
             break;
         }
         (a, ua) = (b, ub);
@@ -119,8 +126,8 @@ pub fn newton_bisection(scene: &ShellScene, increment: f64, tol: f64) -> Result<
     }
     while b - a > tol * b.abs() {
         let m = 0.5 * (a + b);
-        let um = solve(&mut model, &ua, m, &mut stats)?;
-        if indicator(&mut model, &um, m, &mut stats)? == count0 {
+        let um = solve(&mut model, &mut lu, &ua, m, &mut stats)?;
+        if indicator(&mut model, &mut lu, &um, m, &mut stats)? == count0 {
             (a, ua) = (m, um);
         } else {
             b = m;

@@ -45,3 +45,55 @@ pub fn column(run: &anm::model::friction_run::FrictionRun, name: &str) -> Vec<f6
         .unwrap_or_else(|| panic!("no column {name}"));
     run.history.iter().map(|r| r[j]).collect()
 }
+
+/// Rows of two runs on the same output grid with t <= t_max, matched by
+/// time (asserted: at least one, and equal times).
+pub fn rows_up_to<'a>(
+    a: &'a [Vec<f64>],
+    b: &'a [Vec<f64>],
+    t_max: f64,
+) -> Vec<(&'a Vec<f64>, &'a Vec<f64>)> {
+    let rows: Vec<_> = a.iter().zip(b).filter(|(ra, _)| ra[0] <= t_max).collect();
+    assert!(!rows.is_empty(), "no rows to compare");
+    for (ra, rb) in &rows {
+        assert!(
+            (ra[0] - rb[0]).abs() <= 1e-9,
+            "grids differ: {} vs {}",
+            ra[0],
+            rb[0]
+        );
+    }
+    rows
+}
+
+/// Per column j >= 1 (or only those named): max_i |a_ij - b_ij| / max_i
+/// |b_ij| over `rows` (from [`rows_up_to`]).
+pub fn column_errors(
+    cols: &[String],
+    rows: &[(&Vec<f64>, &Vec<f64>)],
+    only: &[&str],
+) -> Vec<(String, f64)> {
+    (1..cols.len())
+        .filter(|&j| only.is_empty() || only.contains(&cols[j].as_str()))
+        .map(|j| {
+            let scale = rows.iter().map(|(_, rb)| rb[j].abs()).fold(0.0, f64::max);
+            let diff = rows
+                .iter()
+                .map(|(ra, rb)| (ra[j] - rb[j]).abs())
+                .fold(0.0, f64::max);
+            (
+                cols[j].clone(),
+                if scale > 0.0 { diff / scale } else { diff },
+            )
+        })
+        .collect()
+}
+
+/// Prints the per-column errors of [`column_errors`] under `title`.
+pub fn print_table(title: &str, errs: &[(String, f64)]) {
+    println!("{title}");
+    println!("  {:<8} {:>12}", "column", "max rel err");
+    for (name, e) in errs {
+        println!("  {name:<8} {e:>12.3e}");
+    }
+}

@@ -50,8 +50,8 @@ fn diffsol(scene: &FrictionScene, method: DiffsolMethod, rtol: f64) -> IdaRun {
     run
 }
 
-/// Per column j >= 1 (or only those named): max_i |a_ij - b_ij| / max_i
-/// |b_ij| over the rows with t <= t_max, rows matched by time.
+/// [`column_errors`](crate::common::column_errors) of the rows with
+/// t <= t_max, neither run stopped before t_max (asserted).
 pub fn column_errors(
     cols: &[String],
     a: &[Vec<f64>],
@@ -59,40 +59,10 @@ pub fn column_errors(
     t_max: f64,
     only: &[&str],
 ) -> Vec<(String, f64)> {
-    let rows: Vec<(&Vec<f64>, &Vec<f64>)> =
-        a.iter().zip(b).filter(|(ra, _)| ra[0] <= t_max).collect();
-    assert!(!rows.is_empty(), "no rows to compare");
+    let rows = crate::common::rows_up_to(a, b, t_max);
     let expected = b.iter().filter(|r| r[0] <= t_max).count();
     assert_eq!(rows.len(), expected, "a run stopped early");
-    for (ra, rb) in &rows {
-        assert!(
-            (ra[0] - rb[0]).abs() <= 1e-9,
-            "grids differ: {} vs {}",
-            ra[0],
-            rb[0]
-        );
-    }
-    (1..cols.len())
-        .filter(|&j| only.is_empty() || only.contains(&cols[j].as_str()))
-        .map(|j| {
-            let scale = rows.iter().map(|(_, rb)| rb[j].abs()).fold(0.0, f64::max);
-            let diff = rows
-                .iter()
-                .map(|(ra, rb)| (ra[j] - rb[j]).abs())
-                .fold(0.0, f64::max);
-            (
-                cols[j].clone(),
-                if scale > 0.0 { diff / scale } else { diff },
-            )
-        })
-        .collect()
-}
-
-fn print_table(title: &str, errs: &[(String, f64)]) {
-    println!("{title}");
-    for (name, e) in errs {
-        println!("  {name:<8} {e:>12.3e}");
-    }
+    crate::common::column_errors(cols, &rows, only)
 }
 
 /// (a) The friction-1d plateau.
@@ -127,7 +97,7 @@ fn anm_vs_diffsol(name: &str, before_stop: f64) {
         _ => a.stop.t.expect("stop time") - before_stop,
     };
     let errs = column_errors(&a.columns, &a.history, &b.history, t_max, &[]);
-    print_table(
+    crate::common::print_table(
         &format!("{name}: ANM vs diffsol BDF (rtol 1e-10), t <= {t_max}"),
         &errs,
     );
@@ -174,7 +144,7 @@ fn bdf_and_esdirk_agree() {
             .surge_window()
             .map_or(f64::INFINITY, |(t1, _)| t1 - 0.05);
         let errs = column_errors(&bdf.columns, &esdirk.history, &bdf.history, t_max, cols);
-        print_table(&format!("{name}: ESDIRK34 vs BDF, t <= {t_max}"), &errs);
+        crate::common::print_table(&format!("{name}: ESDIRK34 vs BDF, t <= {t_max}"), &errs);
         for (c, e) in errs {
             assert!(e <= 1e-7, "{name}: {c} differs by {e:e}");
         }
@@ -219,7 +189,7 @@ fn small_zeta_within_step_budget() {
         f64::INFINITY,
         &["ux"],
     );
-    print_table("plane zeta 1e-4, omega 1e-6: rtol 1e-8 vs 1e-11", &errs);
+    crate::common::print_table("plane zeta 1e-4, omega 1e-6: rtol 1e-8 vs 1e-11", &errs);
     assert!(
         run.counters.steps <= 1500,
         "{} steps at rtol 1e-8",
@@ -249,7 +219,7 @@ fn small_zeta_anm_against_diffsol() {
         f64::INFINITY,
         &["ux", "uy", "rn", "rt"],
     );
-    print_table(
+    crate::common::print_table(
         &format!(
             "friction-plane zeta 1e-4: ANM (auto, {} steps, {} implicit) vs diffsol BDF rtol 1e-10",
             a.stats.steps, a.implicit.steps

@@ -200,7 +200,7 @@ fn ida_roller_plane_limit() {
         );
         assert_eq!(roller.stop.reason, "end", "{:?}", roller.stop);
         let e = column_errors(&flat.columns, &roller.history, &flat.history, f64::INFINITY);
-        print_table(&format!("roller (r = {r:e}) vs plane, IDA"), &e);
+        crate::common::print_table(&format!("roller (r = {r:e}) vs plane, IDA"), &e);
         errs.push(e);
     }
     for ((name, e2), (_, e3)) in errs[0].iter().zip(&errs[1]) {
@@ -213,47 +213,19 @@ fn ida_roller_plane_limit() {
     }
 }
 
-/// Per column j >= 1: max_i |a_ij - b_ij| / max_i |b_ij| over the rows with
-/// t <= t_max (rows matched by time).
+/// [`column_errors`](crate::common::column_errors) of every column over
+/// the rows with t <= t_max, all values finite (asserted).
 fn column_errors(
     cols: &[String],
     a: &[Vec<f64>],
     b: &[Vec<f64>],
     t_max: f64,
 ) -> Vec<(String, f64)> {
-    let rows: Vec<(&Vec<f64>, &Vec<f64>)> =
-        a.iter().zip(b).filter(|(ra, _)| ra[0] <= t_max).collect();
-    assert!(!rows.is_empty(), "no rows to compare");
+    let rows = crate::common::rows_up_to(a, b, t_max);
     for (ra, rb) in &rows {
-        assert!(
-            (ra[0] - rb[0]).abs() <= 1e-9,
-            "grids differ: {} vs {}",
-            ra[0],
-            rb[0]
-        );
         assert!(ra.iter().chain(rb.iter()).all(|v| v.is_finite()));
     }
-    (1..cols.len())
-        .map(|j| {
-            let scale = rows.iter().map(|(_, rb)| rb[j].abs()).fold(0.0, f64::max);
-            let diff = rows
-                .iter()
-                .map(|(ra, rb)| (ra[j] - rb[j]).abs())
-                .fold(0.0, f64::max);
-            (
-                cols[j].clone(),
-                if scale > 0.0 { diff / scale } else { diff },
-            )
-        })
-        .collect()
-}
-
-fn print_table(title: &str, errs: &[(String, f64)]) {
-    println!("{title}");
-    println!("  {:<8} {:>12}", "column", "max rel err");
-    for (name, e) in errs {
-        println!("  {name:<8} {e:>12.3e}");
-    }
+    crate::common::column_errors(cols, &rows, &[])
 }
 
 fn anm(scene: &FrictionScene) -> FrictionRun {
@@ -280,7 +252,7 @@ fn anm_vs_ida(name: &str, before_stop: f64) {
         _ => a.stop.t.expect("stop time") - before_stop,
     };
     let errs = column_errors(&a.columns, &a.history, &b.history, t_max);
-    print_table(
+    crate::common::print_table(
         &format!("{name}: ANM vs IDA (rtol {RTOL:e}), t <= {t_max}"),
         &errs,
     );
