@@ -9,7 +9,7 @@
 //! [load]      F = 1.0                      # N/s (plane, roller); friction-1d: RN (N)
 //! [initial]   mode = "newton", u0 = 0.0, v0 = 1.0
 //! [solver]    order = 20, eps = 1e-10, t_end = 3.0, on_singularity = "stop"  # or "continue"
-//!             time_step = "explicit"       # or "auto", "implicit", "pade" (series::dae::implicit)
+//!             time_step = "auto"           # or "explicit", "implicit", "pade" (series::dae::implicit)
 //! [output]    dt = 0.01
 //! ```
 
@@ -340,8 +340,8 @@ pub fn load(path: &Path, text: &str, kind: Kind) -> Result<FrictionScene> {
         }
     };
     let stepping = match s.time_step.as_deref() {
-        Some("auto") => Stepping::Auto,
-        None | Some("explicit") => Stepping::Explicit,
+        None | Some("auto") => Stepping::Auto,
+        Some("explicit") => Stepping::Explicit,
         Some("implicit") => Stepping::Implicit,
         Some("pade") => Stepping::Pade,
         Some(other) => {
