@@ -39,6 +39,17 @@ fn every_run_meets_its_check_or_stops_with_a_diagnosis() {
         assert!(!c.message.is_empty(), "{c:?}");
     }
     assert!(cases.iter().filter(|c| c.verdict == Verdict::Met).count() >= cases.len() / 2);
+    // Issue 13 item 3: the small regularizations run to their end within the
+    // budget (the explicit series needed more than 20,000 steps at zeta =
+    // 1e-4 N) and meet the check.
+    let small: Vec<_> = cases
+        .iter()
+        .filter(|c| (c.axis == "zeta" || c.axis == "omega") && c.value < 1e-3)
+        .collect();
+    assert!(!small.is_empty());
+    for c in small {
+        assert_eq!(c.verdict, Verdict::Met, "{c:?}");
+    }
 }
 
 /// Three runs on the 0.1 m plate-cylinder that once broke down, all to meet
