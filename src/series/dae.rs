@@ -419,7 +419,7 @@ pub fn run<P: DaeProblem + ?Sized>(
     r.implicit = ImplicitCounts {
         steps: chooser.accepted,
         rejected: chooser.rejected,
-        iterations: chooser.iterations,
+        iterations: chooser.iterations + chooser.output_iterations,
     };
     r
 }

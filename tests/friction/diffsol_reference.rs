@@ -151,11 +151,18 @@ fn bdf_and_esdirk_agree() {
     }
 }
 
-/// (d) The ANM's stop inside diffsol's surge window.
+/// (d) The ANM's stop inside diffsol's surge window (the paper's explicit
+/// series; where the geometric test fires depends on the step sequence),
+/// and the located t* of the default stepping between diffsol's t(10 Vc)
+/// and the peak of its slip (as `tests/reference/ida.rs` (c)).
 #[test]
 fn roller_stop_in_diffsol_window() {
     let sc = friction_scene("friction-roller.toml", &[]);
-    let a = anm_run(&sc, None, false).unwrap_or_else(|e| panic!("ANM failed: {e}"));
+    let explicit = friction_scene(
+        "friction-roller.toml",
+        &[("solver.time_step", "\"explicit\"")],
+    );
+    let a = anm_run(&explicit, None, false).unwrap_or_else(|e| panic!("ANM failed: {e}"));
     let b = diffsol(&sc, DiffsolMethod::Bdf, 1e-10);
     let t_stop = a.stop.t.expect("ANM stop time");
     let (t1, t10) = b.surge_window().expect("diffsol's |slip| reaches 10 Vc");
@@ -167,6 +174,25 @@ fn roller_stop_in_diffsol_window() {
     assert!(
         t1 <= t_stop && t_stop <= t10,
         "ANM stop {t_stop} outside diffsol's window [{t1}, {t10}]"
+    );
+    let peak = b
+        .steps
+        .iter()
+        .max_by(|x, y| x.slip.abs().total_cmp(&y.slip.abs()))
+        .expect("diffsol steps");
+    let d = anm_run(&sc, None, false).unwrap_or_else(|e| panic!("ANM failed: {e}"));
+    let t_star = d.t_singular_estimate.expect("ANM t* estimate");
+    println!(
+        "default stepping: stop at {:.9}, t* = {t_star:.9}; diffsol peak |v_s| = {:.3e} at {:.9}",
+        d.stop.t.unwrap_or(f64::NAN),
+        peak.slip.abs(),
+        peak.t
+    );
+    assert_eq!(d.stop.reason, "singularity", "{:?}", d.stop);
+    assert!(
+        t10 <= t_star && t_star <= peak.t,
+        "ANM t* {t_star} outside [diffsol t(10 Vc) {t10}, diffsol peak {}]",
+        peak.t
     );
 }
 

@@ -25,7 +25,7 @@ fn every_run_meets_its_check_or_stops_with_a_diagnosis() {
         ("omega", vec![1e-4, 1.0]),
         ("zeta", vec![1e-6, 1.0]),
         ("q", vec![0.01, 1.0]),
-        ("order", vec![5.0, 40.0]),
+        ("order", vec![5.0, 10.0, 40.0]),
     ];
     let cases = stress(&scenes, &axes, 5000);
     println!("{}", markdown(&cases));
