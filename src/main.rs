@@ -362,6 +362,12 @@ fn error_chain(e: &anyhow::Error) -> String {
 }
 
 fn main() -> ExitCode {
+    // A closed stdout (`anm ... | head`) ends the process as for any Unix
+    // tool, not with a panic in println!.
+    #[cfg(unix)]
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
     let cli = Cli::parse();
     // MPI lives for the whole process (feature mumps): every MUMPS instance
     // is dropped inside `dispatch`, before MPI_Finalize.
