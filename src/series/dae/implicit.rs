@@ -107,11 +107,14 @@ pub(super) struct Chooser {
     /// Quasi-Newton iterations of implicit tries (accepted or not).
     pub iterations: usize,
     /// Quasi-Newton iterations of the output times inside implicit steps,
-    /// kept out of [`Chooser::cost`]: counted in, they grow with the outputs
-    /// a long step covers, and on the closed-form test (tau = 1e-2 s) the
-    /// cost of a step reached 147 explicit steps, so `auto` went back to
-    /// explicit steps (32 steps instead of 9).
+    /// and how many output times they solved: [`Chooser::cost`] charges a
+    /// step for the outputs it covers (an explicit step gets them from its
+    /// series for free), per output, not averaged into the step: averaged,
+    /// they grew with the outputs long steps cover, and on the closed-form
+    /// test (tau = 1e-2 s) a step's cost reached 147 explicit steps, so
+    /// `auto` went back to explicit steps (32 steps instead of 9).
     pub output_iterations: usize,
+    pub output_points: usize,
     pub accepted: usize,
     pub rejected: usize,
 }
@@ -125,16 +128,23 @@ impl Chooser {
         self.failures += 1;
     }
 
-    /// Cost of an implicit step in explicit steps (series of order N):
-    /// the series at t0, then per iteration a series of order n and the
-    /// consistent initialization (about two factorizations).
-    fn cost(&self, n_ord: usize) -> f64 {
+    /// Cost of an implicit step that covers `outputs` output times, in
+    /// explicit steps (series of order N): the series at t0, then per
+    /// iteration (of the step, and of each output time it covers) a series
+    /// of order n and the consistent initialization (about two
+    /// factorizations).
+    fn cost(&self, n_ord: usize, outputs: usize) -> f64 {
         let per_step = if self.accepted == 0 {
             4.0
         } else {
             self.iterations as f64 / self.accepted as f64
         };
-        1.0 + per_step * (HO_N + 2) as f64 / n_ord as f64
+        let per_output = if self.output_points == 0 {
+            2.0
+        } else {
+            self.output_iterations as f64 / self.output_points as f64
+        };
+        1.0 + (per_step + outputs as f64 * per_output) * (HO_N + 2) as f64 / n_ord as f64
     }
 }
 
@@ -178,7 +188,7 @@ pub(super) fn step<P: DaeProblem + ?Sized>(
     if try_implicit {
         let (m, n) = (HO_M.min(n_ord - 1), HO_N.min(n_ord));
         let mut h =
-            ch.h.unwrap_or(4.0 * ch.cost(n_ord) * a_exp)
+            ch.h.unwrap_or(4.0 * ch.cost(n_ord, 0) * a_exp)
                 .max(a_exp)
                 .min(remaining);
         loop {
@@ -188,7 +198,13 @@ pub(super) fn step<P: DaeProblem + ?Sized>(
             }
             match attempt(eng, ch, u0, vz0, t0, h, (m, n), index, cfg, &series0, None) {
                 Ok((series, ratio)) if ratio <= 1.0 => {
-                    if cfg.stepping == Stepping::Auto && h < PAYS * ch.cost(n_ord) * a_exp {
+                    let covered = cfg
+                        .output_times
+                        .iter()
+                        .filter(|&&t| t > t0 && t < t0 + h)
+                        .count();
+                    if cfg.stepping == Stepping::Auto && h < PAYS * ch.cost(n_ord, covered) * a_exp
+                    {
                         // Not paying for itself: the explicit step, and
                         // explicit steps for a while.
                         break;
@@ -243,6 +259,7 @@ pub(super) fn step<P: DaeProblem + ?Sized>(
                         }
                     }
                     ch.output_iterations += ch.iterations - before;
+                    ch.output_points += points.len();
                     ch.iterations = before;
                     if let Some(t) = missed {
                         // An output time (I2) cannot reach: the Hermite
