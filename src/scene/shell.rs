@@ -1162,7 +1162,7 @@ fn friction(
         Motion::Translate { velocity } => velocity.norm() > 0.0,
         Motion::Rotate { omega } => omega != 0.0,
     });
-    if !moving && !(loaded && load.varies()) {
+    if !(moving || loaded && load.varies()) {
         return Err(c.fail(
             "friction",
             "nothing moves in time: give an [[obstacle]] a `translate` or `rotate` motion, or [[load]]s / non-zero [[fix]] values that vary in time (friction.load_ramp)",

@@ -242,12 +242,12 @@ fn series_along_a_path_match_direct_evaluation_and_jacobian() {
             let nf = law
                 .nodal(&obst, &motion, &x_s[0], &v_s[0], rn_s[0])
                 .unwrap();
-            for i in 0..3 {
+            for (i, row) in jac.iter().enumerate() {
                 for j in 0..3 {
-                    assert!(close(jac[i][j], nf.d_x[(i, j)], 1e-12));
-                    assert!(close(jac[i][3 + j], nf.d_xdot[(i, j)], 1e-12));
+                    assert!(close(row[j], nf.d_x[(i, j)], 1e-12));
+                    assert!(close(row[3 + j], nf.d_xdot[(i, j)], 1e-12));
                 }
-                assert!(close(jac[i][6], nf.d_rn[i], 1e-12));
+                assert!(close(row[6], nf.d_rn[i], 1e-12));
             }
         }
     }

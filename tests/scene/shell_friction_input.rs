@@ -8,7 +8,7 @@ use anm::Error;
 use anm::contact::FrictionLaw;
 use anm::scene::shell::load;
 use anm::shell::ramp::Ramp;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 const BASE: &str = "tests/data/shell-friction.toml";
 
@@ -27,7 +27,7 @@ fn scene(name: &str, edits: &[(&str, &str)]) -> PathBuf {
 }
 
 #[track_caller]
-fn expect_invalid(path: &PathBuf, key: &str, part: &str) {
+fn expect_invalid(path: &Path, key: &str, part: &str) {
     let e = match load(path) {
         Ok(_) => panic!("{}: expected an error on {key}", path.display()),
         Err(e) => e,
@@ -42,7 +42,7 @@ fn expect_invalid(path: &PathBuf, key: &str, part: &str) {
 
 #[test]
 fn the_friction_table_is_read() {
-    let s = load(std::path::Path::new(BASE)).unwrap();
+    let s = load(Path::new(BASE)).unwrap();
     let fr = s.friction.expect("[friction]");
     assert_eq!(
         fr.law,
@@ -206,7 +206,7 @@ fn a_motion_only_friction_feels_warns_without_friction() {
     assert!(load(&p).unwrap().warnings.is_empty());
     // The same scene with [friction] is a problem in time, which `anm run`
     // refuses clearly until the series in time exists (issue 10 item 2).
-    let s = load(std::path::Path::new(BASE)).unwrap();
+    let s = load(Path::new(BASE)).unwrap();
     let e = anm::run::shell::run_loaded(&s, None, false).unwrap_err();
     assert!(
         matches!(&e, Error::Invalid { key, .. } if key == "friction"),
