@@ -144,6 +144,9 @@ struct RunCheckpoint {
 /// Runs a scene file into `out_dir`.
 pub fn run_scene(scene_path: &Path, out_dir: &Path, progress: bool) -> Result<RunReport> {
     let scene = load(scene_path)?;
+    for w in &scene.warnings {
+        eprintln!("warning: {w}");
+    }
     run_loaded(&scene, Some(out_dir), progress)
 }
 
@@ -266,6 +269,15 @@ fn run_inner(
     progress: bool,
     resumed: Option<RunCheckpoint>,
 ) -> Result<RunReport> {
+    if scene.friction.is_some() {
+        // The series in time of the shell with friction is issue 10 item 2:
+        // refuse rather than run the static path without friction.
+        return Err(Error::Invalid {
+            file: scene.file.clone(),
+            key: "friction".into(),
+            problem: "the shell with friction (a problem in time) cannot be solved by this build yet (issue 10 item 2); remove [friction] for the static path in lambda".into(),
+        });
+    }
     let start = Instant::now();
     let mut model = build_model(scene)?;
     model.length_scale = scene.length_scale;

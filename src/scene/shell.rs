@@ -9,7 +9,7 @@
 //! the key (`table.key`, `load[2].pressure`).
 
 use super::{Checker, parse, read, relative_to};
-use crate::contact::{Motion, Obstacle};
+use crate::contact::{FrictionLaw, Motion, Obstacle};
 use crate::error::Result;
 use crate::fe::dof::{Component, Dof};
 use crate::linalg::{Backend, Choice};
@@ -17,6 +17,7 @@ use crate::mesh::{Mesh, Vec3, gmsh, structured};
 use crate::series::ContinuationConfig;
 use crate::series::newton::{Control, NewtonConfig};
 use crate::shell::Material;
+use crate::shell::ramp::Ramp;
 use serde::Deserialize;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -37,6 +38,7 @@ struct Raw {
     #[serde(default)]
     obstacle: Vec<RawObstacle>,
     contact: Option<RawContact>,
+    friction: Option<RawFriction>,
     #[serde(default)]
     probe: Vec<RawProbe>,
     solver: RawSolver,
@@ -148,6 +150,22 @@ struct RawContact {
     search_distance: f64,
 }
 
+/// `[friction]`: the regularized friction law (eqs. 5, 6, 11) at every
+/// contact node, which makes the scene a problem in time (issue 10).
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+#[allow(non_snake_case)]
+struct RawFriction {
+    f: f64,
+    q: f64,
+    Vc: f64,
+    omega: f64,
+    zeta: Option<f64>,
+    t_end: f64,
+    load_ramp: Option<[f64; 2]>,
+    motion_ramp: Option<[f64; 2]>,
+}
+
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct RawProbe {
@@ -227,6 +245,17 @@ pub struct ContactSpec {
     pub k: f64,
     pub eta: f64,
     pub search_distance: f64,
+}
+
+/// Friction at the contact nodes and the scene's dependence on time: loads
+/// and prescribed values scaled by `load.value(t)` instead of lambda,
+/// obstacle velocities (m/s, rad/s) by `motion.value(t)`.
+#[derive(Clone, Debug)]
+pub struct FrictionSpec {
+    pub law: FrictionLaw,
+    pub t_end: f64,
+    pub load: Ramp,
+    pub motion: Ramp,
 }
 
 /// What a probe measures.
@@ -327,6 +356,11 @@ pub struct ShellScene {
     pub loads: Vec<Load>,
     pub obstacles: Vec<ObstacleSpec>,
     pub contact: Option<ContactSpec>,
+    /// `[friction]`: None keeps the static path in lambda.
+    pub friction: Option<FrictionSpec>,
+    /// Input that is valid but likely not what the user meant (printed by
+    /// `anm run`).
+    pub warnings: Vec<String>,
     pub probes: Vec<Probe>,
     pub method: Method,
     pub solver: ContinuationConfig,
@@ -516,7 +550,7 @@ pub fn load(path: &Path) -> Result<ShellScene> {
                     m.kind == "translate" && m.velocity.is_some_and(|v| v.iter().any(|x| *x != 0.0))
                 })
             }));
-    if !driven {
+    if !driven && raw.friction.is_none() {
         return Err(c.fail(
             "load",
             "missing: nothing drives the path: give a [[load]], a [[fix]] with a non-zero `value`, or a translating [[obstacle]] with [contact] (all scaled by lambda)",
@@ -539,6 +573,16 @@ pub fn load(path: &Path) -> Result<ShellScene> {
             })
         }
         None => None,
+    };
+    let loaded = !loads.is_empty() || fixed.values().any(|v| *v != 0.0);
+    let friction = match &raw.friction {
+        Some(fr) => Some(friction(&c, fr, &obstacles, contact.is_some(), loaded)?),
+        None => None,
+    };
+    let warnings = if friction.is_none() {
+        motion_warnings(path, &obstacles)
+    } else {
+        vec![]
     };
     let probes = probes(&ctx, &raw.probe, &fixed, &obstacles, contact.is_some())?;
     let (method, solver, length_scale) = solver(&c, &raw.solver, size)?;
@@ -581,6 +625,8 @@ pub fn load(path: &Path) -> Result<ShellScene> {
         loads,
         obstacles,
         contact,
+        friction,
+        warnings,
         probes,
         method,
         solver,
@@ -1064,6 +1110,105 @@ fn obstacles(ctx: &Ctx, raw: &[RawObstacle]) -> Result<Vec<ObstacleSpec>> {
         });
     }
     Ok(out)
+}
+
+/// The `[friction]` table: the law, the end time and the time functions.
+fn friction(
+    c: &Checker,
+    fr: &RawFriction,
+    obstacles: &[ObstacleSpec],
+    contact: bool,
+    loaded: bool,
+) -> Result<FrictionSpec> {
+    if !contact {
+        return Err(c.fail(
+            "friction",
+            "needs [contact]: friction acts at the contact nodes",
+        ));
+    }
+    let f = c.non_negative("friction.f", fr.f)?;
+    let q = c.within("friction.q", fr.q, 0.0, 1.0)?;
+    let vc = c.positive("friction.Vc", fr.Vc)?;
+    // Below q = 1 the law is singular at zero slip without omega.
+    let omega = if q < 1.0 {
+        c.positive("friction.omega", fr.omega)?
+    } else {
+        c.non_negative("friction.omega", fr.omega)?
+    };
+    let zeta = match fr.zeta {
+        Some(z) => Some(c.positive("friction.zeta", z)?),
+        None => None,
+    };
+    let t_end = c.positive("friction.t_end", fr.t_end)?;
+    let ramp = |key: &str, r: Option<[f64; 2]>| -> Result<Ramp> {
+        let Some([start, end]) = r else {
+            return Ok(Ramp::FULL);
+        };
+        let key = format!("friction.{key}");
+        c.non_negative(&key, start)?;
+        c.finite(&key, end)?;
+        if !(end >= start && start < t_end) {
+            return Err(c.fail(
+                &key,
+                format!("[start, end] = [{start}, {end}] must have start <= end and start < friction.t_end = {t_end}"),
+            ));
+        }
+        Ok(Ramp { start, end })
+    };
+    let load = ramp("load_ramp", fr.load_ramp)?;
+    let motion = ramp("motion_ramp", fr.motion_ramp)?;
+    let moving = obstacles.iter().any(|o| match o.motion {
+        Motion::Fixed => false,
+        Motion::Translate { velocity } => velocity.norm() > 0.0,
+        Motion::Rotate { omega } => omega != 0.0,
+    });
+    if !(moving || loaded && load.varies()) {
+        return Err(c.fail(
+            "friction",
+            "nothing moves in time: give an [[obstacle]] a `translate` or `rotate` motion, or [[load]]s / non-zero [[fix]] values that vary in time (friction.load_ramp)",
+        ));
+    }
+    Ok(FrictionSpec {
+        law: FrictionLaw {
+            f,
+            q,
+            vc,
+            omega,
+            zeta,
+        },
+        t_end,
+        load,
+        motion,
+    })
+}
+
+/// Obstacle motions that only friction would feel, in a scene without it:
+/// a rotation (only the surface moves) or a translation along the obstacle's
+/// own surface (no gap changes).
+fn motion_warnings(path: &Path, obstacles: &[ObstacleSpec]) -> Vec<String> {
+    let mut out = vec![];
+    for (i, o) in obstacles.iter().enumerate() {
+        let what = match (o.motion, &o.shape) {
+            (Motion::Rotate { omega }, _) if omega != 0.0 => "turns the obstacle's surface",
+            (Motion::Translate { velocity }, Obstacle::Plane { normal, .. })
+                if velocity.norm() > 0.0 && velocity.dot(normal) == 0.0 =>
+            {
+                "slides the plane within itself"
+            }
+            (Motion::Translate { velocity }, Obstacle::Cylinder { axis, .. })
+                if velocity.norm() > 0.0
+                    && velocity.cross(axis).norm() <= 1e-12 * velocity.norm() =>
+            {
+                "slides the cylinder along its axis"
+            }
+            _ => continue,
+        };
+        out.push(format!(
+            "{}: obstacle[{i}].motion {what}, which only friction feels: without [friction] it has no effect",
+            path.display()
+        ));
+    }
+    out
 }
 
 fn axis_of(s: &str) -> Option<usize> {

@@ -7,6 +7,7 @@ pub mod element;
 pub mod kinematics;
 pub mod material;
 pub mod model;
+pub mod ramp;
 pub mod series;
 
 pub use element::ShellElement;

@@ -9,4 +9,5 @@ mod friction_1d_closed_form;
 mod plane_closed_form;
 mod reference_cli;
 mod roller_breakdown;
+mod shell_friction_law;
 mod stiff_linear;

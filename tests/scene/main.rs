@@ -5,3 +5,4 @@ mod bad_input;
 mod docs;
 mod fuzz;
 mod shell_bad_input;
+mod shell_friction_input;

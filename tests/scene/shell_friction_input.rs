@@ -1,0 +1,215 @@
+//! The `[friction]` table of shell scenes (issue 10 items 2 and 7): a valid
+//! table, bad values and missing drivers stop with errors naming the file
+//! and the key; an obstacle motion that only friction would feel, in a scene
+//! without friction, is allowed with a warning (the keys' documentation:
+//! tests/scene/docs.rs).
+
+use anm::Error;
+use anm::contact::FrictionLaw;
+use anm::scene::shell::load;
+use anm::shell::ramp::Ramp;
+use std::path::{Path, PathBuf};
+
+const BASE: &str = "tests/data/shell-friction.toml";
+
+/// The friction fixture with `edits` (old, new) applied.
+fn scene(name: &str, edits: &[(&str, &str)]) -> PathBuf {
+    let mut text = std::fs::read_to_string(BASE).unwrap();
+    for (old, new) in edits {
+        assert!(text.contains(old), "edit `{old}` does not apply");
+        text = text.replacen(old, new, 1);
+    }
+    let d = std::env::temp_dir().join("anm-shell-friction-input");
+    std::fs::create_dir_all(&d).unwrap();
+    let p = d.join(name);
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+#[track_caller]
+fn expect_invalid(path: &Path, key: &str, part: &str) {
+    let e = match load(path) {
+        Ok(_) => panic!("{}: expected an error on {key}", path.display()),
+        Err(e) => e,
+    };
+    let msg = e.to_string();
+    println!("{msg}");
+    assert_eq!(e.kind(), "invalid_input", "{msg}");
+    for p in [&path.file_name().unwrap().to_string_lossy(), key, part] {
+        assert!(msg.contains(p), "message `{msg}` lacks `{p}`");
+    }
+}
+
+#[test]
+fn the_friction_table_is_read() {
+    let s = load(Path::new(BASE)).unwrap();
+    let fr = s.friction.expect("[friction]");
+    assert_eq!(
+        fr.law,
+        FrictionLaw {
+            f: 0.2,
+            q: 0.0,
+            vc: 0.1,
+            omega: 1e-3,
+            zeta: Some(1e-6)
+        }
+    );
+    assert_eq!(fr.t_end, 2.0);
+    assert_eq!(
+        fr.load,
+        Ramp {
+            start: 0.0,
+            end: 0.5
+        }
+    );
+    assert_eq!(
+        fr.motion,
+        Ramp {
+            start: 0.5,
+            end: 0.6
+        }
+    );
+    assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+}
+
+#[test]
+fn bad_friction_values_name_the_key() {
+    let cases: &[(&str, &str, &str, &str)] = &[
+        ("negative-f.toml", "f = 0.2", "f = -0.1", "friction.f"),
+        ("q-above.toml", "q = 0.0", "q = 1.5", "friction.q"),
+        ("q-below.toml", "q = 0.0", "q = -0.2", "friction.q"),
+        ("vc-zero.toml", "Vc = 0.1", "Vc = 0.0", "friction.Vc"),
+        (
+            "omega-zero.toml",
+            "omega = 1e-3",
+            "omega = 0.0",
+            "friction.omega",
+        ),
+        (
+            "zeta-negative.toml",
+            "zeta = 1e-6",
+            "zeta = -1.0",
+            "friction.zeta",
+        ),
+        (
+            "t-end-zero.toml",
+            "t_end = 2.0",
+            "t_end = 0.0",
+            "friction.t_end",
+        ),
+        (
+            "ramp-backward.toml",
+            "load_ramp = [0.0, 0.5]",
+            "load_ramp = [0.5, 0.2]",
+            "friction.load_ramp",
+        ),
+        (
+            "ramp-late.toml",
+            "motion_ramp = [0.5, 0.6]",
+            "motion_ramp = [3.0, 4.0]",
+            "friction.motion_ramp",
+        ),
+    ];
+    for (name, old, new, key) in cases {
+        let p = scene(name, &[(old, new)]);
+        let problem = match *key {
+            "friction.f" | "friction.load_ramp" | "friction.motion_ramp" => "",
+            _ => "must",
+        };
+        expect_invalid(&p, key, problem);
+    }
+    // The range is stated: f >= 0, q in [0, 1].
+    expect_invalid(
+        &scene("nf.toml", &[("f = 0.2", "f = -0.1")]),
+        "friction.f",
+        ">= 0",
+    );
+    expect_invalid(
+        &scene("q.toml", &[("q = 0.0", "q = 1.5")]),
+        "friction.q",
+        "[0, 1]",
+    );
+    // Viscous friction (q = 1) needs no slip regularization.
+    let p = scene(
+        "viscous.toml",
+        &[("q = 0.0", "q = 1.0"), ("omega = 1e-3", "omega = 0.0")],
+    );
+    assert!(load(&p).is_ok());
+}
+
+#[test]
+fn friction_needs_something_that_moves_in_time() {
+    let still = ("velocity = [0.1, 0.0, 0.0]", "velocity = [0.0, 0.0, 0.0]");
+    // No obstacle motion and a load full from t = 0: nothing moves.
+    let p = scene("still.toml", &[still, ("load_ramp = [0.0, 0.5]\n", "")]);
+    expect_invalid(&p, "friction", "nothing moves in time");
+    // No load at all and a fixed floor: the same error (not the lambda one).
+    let p = scene(
+        "still-unloaded.toml",
+        &[
+            still,
+            ("[[load]]\ngroup = \"tip\"\nforce = [0.0, 0.0, -0.5]\n", ""),
+        ],
+    );
+    expect_invalid(&p, "friction", "nothing moves in time");
+    // A load that rises in time is enough; so is a turning obstacle.
+    assert!(load(&scene("ramped.toml", &[still])).is_ok());
+    let p = scene(
+        "turning.toml",
+        &[
+            still,
+            ("load_ramp = [0.0, 0.5]\n", ""),
+            (
+                "type = \"plane\"\npoint = [0.0, 0.0, -0.01]\nnormal = [0.0, 0.0, 1.0]\nmotion = { type = \"translate\", velocity = [0.0, 0.0, 0.0] }",
+                "type = \"cylinder\"\ncentre = [1.0, 0.0, -0.51]\naxis = [0.0, 1.0, 0.0]\nradius = 0.5\nmotion = { type = \"rotate\", omega = 0.2 }",
+            ),
+        ],
+    );
+    assert!(load(&p).is_ok());
+    // Friction without contact.
+    let p = scene(
+        "no-contact.toml",
+        &[(
+            "[contact]\ngroup = \"tip\"\nk = 1e9\neta = 1e-6\nsearch_distance = 1.0\n",
+            "",
+        )],
+    );
+    expect_invalid(&p, "friction", "[contact]");
+}
+
+#[test]
+fn a_motion_only_friction_feels_warns_without_friction() {
+    let frictionless = (
+        "[friction]\nf = 0.2\nq = 0.0\nVc = 0.1\nomega = 1e-3\nzeta = 1e-6\nt_end = 2.0\nload_ramp = [0.0, 0.5]\nmotion_ramp = [0.5, 0.6]\n",
+        "",
+    );
+    // The floor slides within its own plane: allowed, with a warning.
+    let p = scene("sliding-floor.toml", &[frictionless]);
+    let s = load(&p).unwrap();
+    assert!(s.friction.is_none());
+    assert_eq!(s.warnings.len(), 1, "{:?}", s.warnings);
+    let w = &s.warnings[0];
+    assert!(
+        w.contains("sliding-floor.toml")
+            && w.contains("obstacle[0].motion")
+            && w.contains("[friction]"),
+        "{w}"
+    );
+    // A floor that approaches the strip changes gaps: no warning.
+    let p = scene(
+        "rising-floor.toml",
+        &[
+            frictionless,
+            ("velocity = [0.1, 0.0, 0.0]", "velocity = [0.0, 0.0, 0.01]"),
+        ],
+    );
+    assert!(load(&p).unwrap().warnings.is_empty());
+    // The same scene with [friction] is a problem in time, which `anm run`
+    // refuses clearly until the series in time exists (issue 10 item 2).
+    let s = load(Path::new(BASE)).unwrap();
+    let e = anm::run::shell::run_loaded(&s, None, false).unwrap_err();
+    assert!(
+        matches!(&e, Error::Invalid { key, .. } if key == "friction"),
+        "{e}"
+    );
+}
