@@ -16,7 +16,8 @@
 //! 1. locate: g_k(U(a), lambda(a)) on the step's own representation over
 //!    [0, a_s] (a_s the step length of the step rules), continued beyond a_s
 //!    by the tangent of the series at a_s up to HORIZON a_s; the event is the
-//!    earliest sign change a_e (bisection inside [0, a_s]).
+//!    earliest a_e where a g_k that starts outside its band (|g_k| >= BAND)
+//!    changes sign or enters |g_k| <= 1 (bisection).
 //! 2. predict: from a_b = min(a_e, a_s), along the series' tangent t = U'(a_b):
 //!    P = (U, lambda)(a_b) + (a_e + D - a_b) t, D = max(a_e, L_prev) past the
 //!    switch (L_prev: the previous step's length, the path's scale where it
@@ -30,6 +31,14 @@
 //!    (a first-order "series"), on which output grid points are corrected
 //!    at their load like those of any step.
 //! ```
+//! Why it is off by default (`ContinuationConfig::events`; figures in the
+//! README, "plate-cylinder: ANM against Newton-Raphson"): it pays where one
+//! switch is crossed and Newton converges quadratically from the predictor
+//! (one unknown against the law of eq. 3: 1 step instead of 30), but on a
+//! shell many contact nodes rest inside their band, where Newton from a
+//! predictor farther than the band width w from the solution converges
+//! slowly; on plate-cylinder most jumps fail and cost more factorizations
+//! than the short steps they replace.
 //! A step whose end would pass `lambda_end` lands on it at fixed load.
 
 use super::continuation::{ContinuationConfig, ContinuationProblem, PathStep};
