@@ -272,9 +272,10 @@ fn chord(
 mod tests {
     use super::*;
 
-    /// g(a) = 1 - 2a along a linear step of length 1: the switch is at a = 0.5,
-    /// found inside the step; with the step 0.25 long it is found on the
-    /// tangent beyond the step end, within HORIZON step lengths.
+    /// g(a) = 100 (1 - 2a) along a linear step of length 1 enters its band
+    /// |g| <= 1 at a = 0.495, found inside the step; with the step 0.25 long
+    /// it is found on the tangent beyond the step end, within HORIZON step
+    /// lengths. g = 5 - 10a starts inside the band and is not an event.
     struct Line;
     impl ContinuationProblem for Line {
         fn ndof(&self) -> usize {
@@ -294,7 +295,7 @@ mod tests {
             unreachable!()
         }
         fn events(&self, u: &[f64], _lambda: f64) -> Result<Vec<f64>> {
-            Ok(vec![5.0, 1.0 - 2.0 * u[0]])
+            Ok(vec![5.0 - 10.0 * u[0], 100.0 * (1.0 - 2.0 * u[0])])
         }
     }
 
@@ -316,11 +317,11 @@ mod tests {
     }
 
     #[test]
-    fn the_earliest_sign_change_is_located_inside_and_beyond_the_step() {
+    fn the_earliest_entry_into_a_band_is_located_inside_and_beyond_the_step() {
         for length in [1.0, 0.25] {
             let c = locate(&mut Line, &line(length)).unwrap().unwrap();
             assert_eq!(c.event, 1);
-            assert!((c.a - 0.5).abs() < 1e-12, "{length}: {c:?}");
+            assert!((c.a - 0.495).abs() < 1e-12, "{length}: {c:?}");
         }
         // Beyond the horizon: no event.
         assert_eq!(locate(&mut Line, &line(0.1)).unwrap(), None);
