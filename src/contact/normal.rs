@@ -33,6 +33,17 @@ impl NormalLaw {
         }
     }
 
+    /// Width w = sqrt(eta |delta| / K) of the switch of eq. (3) at h = 0: in
+    /// g = h / w and r = R / (K w) (delta ≫ h) the law reads r (r + g) = 1,
+    /// whose branch points g = ±2i bound the radius of convergence of any
+    /// series through contact. Positive (the smallest normal f64 for a zero
+    /// delta or eta).
+    pub fn switch_width(&self) -> f64 {
+        (self.eta * self.delta.abs() / self.k)
+            .sqrt()
+            .max(f64::MIN_POSITIVE)
+    }
+
     /// dR/dh from differentiating eq. (3): (2R/K + h) dR = -(R + eta) dh.
     pub fn stiffness(&self, h: f64) -> f64 {
         let r = self.force(h);
@@ -97,6 +108,20 @@ mod tests {
             (l.force(1e6) + l.eta).abs() < 1e-9 * l.eta + 1e-16,
             "far pull tends to -eta"
         );
+    }
+
+    /// r = R / (K w) against the closed form of r (r + g) = 1 in g = h / w
+    /// (the switch band of the law): r(0) = 1 up to the eta h term.
+    #[test]
+    fn the_switch_width_makes_the_law_dimensionless() {
+        let l = law();
+        let w = l.switch_width();
+        assert!((w - 1e-19f64.sqrt()).abs() < 1e-24);
+        for g in [-10.0, -1.0, 0.0, 1.0, 10.0] {
+            let r = l.force(g * w) / (l.k * w);
+            let want = 0.5 * (-g + (g * g + 4.0).sqrt());
+            assert!((r - want).abs() < 1e-4 * want, "g = {g}: {r} vs {want}");
+        }
     }
 
     #[test]

@@ -500,6 +500,7 @@ fn run_inner(
                         u,
                         lambda,
                         prev_dir: Some((dir, 0.0)),
+                        prev_length: None,
                         stats: path.stats().clone(),
                     };
                     let model = path.into_problem();

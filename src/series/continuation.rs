@@ -43,6 +43,14 @@ pub trait ContinuationProblem {
     fn unknown_scale(&self) -> Vec<f64> {
         vec![1.0; self.ndof()]
     }
+    /// Event functions g_k(U, lambda) (default: none): the problem's
+    /// behaviour switches at g_k = 0 within a band |g_k| of order 1 (e.g. a
+    /// regularized contact law closing), which the engine crosses by a
+    /// corrected jump instead of short steps ([`super::events`]). The same
+    /// number of values, in the same order, at every state of a run.
+    fn events(&self, _u: &[f64], _lambda: f64) -> Result<Vec<f64>> {
+        Ok(vec![])
+    }
 }
 
 /// Numerical settings of a continuation run.
@@ -72,6 +80,12 @@ pub struct ContinuationConfig {
     pub lambda_scale: f64,
     /// Linear-solver backend: chosen per tangent (default) or forced.
     pub linear: Choice,
+    /// Cross the problem's events ([`ContinuationProblem::events`]) by
+    /// corrected jumps ([`super::events`]); off (default): by ordinary
+    /// steps. Off by default: on plate-cylinder the jumps' Newton
+    /// corrections converge too slowly across the contact law's corner
+    /// (README, "plate-cylinder: ANM against Newton-Raphson").
+    pub events: bool,
 }
 
 impl Default for ContinuationConfig {
@@ -88,6 +102,7 @@ impl Default for ContinuationConfig {
             min_step: 1e-12,
             lambda_scale: 1.0,
             linear: Choice::Auto,
+            events: false,
         }
     }
 }
@@ -117,6 +132,9 @@ pub struct PathStep {
     /// Negative pivots of the step-start tangent (its number of negative
     /// eigenvalues) when it was factored symmetrically.
     pub negative_pivots: Option<usize>,
+    /// The event crossed by this step, when it is a jump
+    /// ([`super::events`]): the step is then the chord to the corrected end.
+    pub jump: Option<super::events::Crossing>,
 }
 
 impl PathStep {
@@ -320,6 +338,7 @@ mod tests {
             u_end: vec![1.0],
             lambda_end: 0.0,
             negative_pivots: None,
+            jump: None,
         };
         assert!(!step.lambda_is_monotone());
         let a = step.a_at_lambda_all(0.21);

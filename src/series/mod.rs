@@ -7,6 +7,7 @@ pub mod bifurcation;
 pub mod continuation;
 pub mod correct;
 pub mod dae;
+pub mod events;
 pub mod geometric;
 pub mod newton;
 pub mod pade;

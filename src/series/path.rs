@@ -38,6 +38,7 @@
 
 use super::continuation::{ContinuationConfig, ContinuationProblem, PathStep, factorize};
 use super::correct::{self, Constraint, Jacobian, Metric, Settings};
+use super::events;
 use super::geometric;
 use super::pade;
 use super::stats::{Stats, charge};
@@ -61,6 +62,10 @@ pub struct Checkpoint {
     /// (U_1, lambda_1) of the last step, which orients the next one.
     #[serde(with = "bits::dir")]
     pub prev_dir: Option<(Vec<f64>, f64)>,
+    /// Length of the last step (the jump length past an event, see
+    /// [`super::events`]).
+    #[serde(default, with = "bits::opt")]
+    pub prev_length: Option<f64>,
     pub stats: Stats,
 }
 
@@ -72,6 +77,7 @@ pub struct Path<'p, P: ContinuationProblem> {
     u: Vec<f64>,
     lambda: f64,
     prev_dir: Option<(Vec<f64>, f64)>,
+    prev_length: Option<f64>,
     index: usize,
     forward: f64,
     lu: LinearSolver,
@@ -90,6 +96,7 @@ impl<'p, P: ContinuationProblem> Path<'p, P> {
                 u: u0,
                 lambda: lambda0,
                 prev_dir: None,
+                prev_length: None,
                 stats: Stats::default(),
             },
             cfg,
@@ -134,6 +141,7 @@ impl<'p, P: ContinuationProblem> Path<'p, P> {
             u: cp.u,
             lambda: cp.lambda,
             prev_dir: cp.prev_dir,
+            prev_length: cp.prev_length,
             index: cp.index,
             forward,
             lu,
@@ -178,6 +186,7 @@ impl<'p, P: ContinuationProblem> Path<'p, P> {
             &self.cfg,
             &self.metric,
             &self.prev_dir,
+            self.prev_length,
             self.forward,
             &mut self.lu,
             &mut self.stats,
@@ -188,6 +197,7 @@ impl<'p, P: ContinuationProblem> Path<'p, P> {
                 self.u.clone_from(&step.u_end);
                 self.lambda = step.lambda_end;
                 self.prev_dir = Some((step.u[1].clone(), step.lambda[1]));
+                self.prev_length = Some(step.length);
                 Ok(step)
             }
             Err(e) => {
@@ -205,6 +215,7 @@ impl<'p, P: ContinuationProblem> Path<'p, P> {
             u: self.u.clone(),
             lambda: self.lambda,
             prev_dir: self.prev_dir.clone(),
+            prev_length: self.prev_length,
             stats: self.stats.clone(),
         }
     }
@@ -255,6 +266,7 @@ pub(crate) fn series_step<P: ContinuationProblem + ?Sized>(
     cfg: &ContinuationConfig,
     metric: &Metric,
     prev_dir: &Option<(Vec<f64>, f64)>,
+    prev_length: Option<f64>,
     forward: f64,
     lu: &mut LinearSolver,
     stats: &mut Stats,
@@ -344,6 +356,7 @@ pub(crate) fn series_step<P: ContinuationProblem + ?Sized>(
         u_end: vec![],
         lambda_end: 0.0,
         negative_pivots: fact.inertia().map(|i| i.0),
+        jump: None,
     };
     // Padé on the scaled terms: its denominators are those of the scaled
     // series, and the approximant is linear in the terms, so that
@@ -371,12 +384,29 @@ pub(crate) fn series_step<P: ContinuationProblem + ?Sized>(
     {
         step.length = a;
     }
+    let scale = metric.residual_norm(&r_lambda).max(f64::MIN_POSITIVE);
+    // An event within reach: cross it by a corrected jump (super::events).
+    if cfg.events
+        && let Some(crossing) = events::locate(problem, &step)?
+        && let Some(j) = events::jump(
+            problem,
+            &step,
+            crossing,
+            prev_length,
+            cfg,
+            metric,
+            scale,
+            lu,
+            stats,
+        )?
+    {
+        return Ok(j);
+    }
     // Step end: accept when the residual is small; correct when it is
     // moderately large; otherwise (or when the correction fails) the step
     // length overestimated the series' validity (e.g. a contact node closing
     // within the step): halve it. Halving costs residual evaluations only;
     // correcting from far off the path can converge onto another branch.
-    let scale = metric.residual_norm(&r_lambda).max(f64::MIN_POSITIVE);
     let snap = 1e-9 * cfg.lambda_scale;
     let mut first = true;
     loop {
@@ -480,6 +510,15 @@ mod bits {
                 .into_iter()
                 .map(f64::from_bits)
                 .collect())
+        }
+    }
+    pub mod opt {
+        use serde::{Deserialize, Deserializer, Serialize, Serializer};
+        pub fn serialize<S: Serializer>(x: &Option<f64>, s: S) -> Result<S::Ok, S::Error> {
+            x.map(|v| v.to_bits()).serialize(s)
+        }
+        pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Option<f64>, D::Error> {
+            Ok(Option::<u64>::deserialize(d)?.map(f64::from_bits))
         }
     }
     pub mod dir {

@@ -547,6 +547,24 @@ impl ContinuationProblem for ShellModel {
         self.scales()
     }
 
+    /// Contact events: the gap of every candidate pair over the width of
+    /// its law's switch, g = h / w (NormalLaw::switch_width); not finite
+    /// (ignored) where the gap is undefined.
+    fn events(&self, u: &[f64], lambda: f64) -> Result<Vec<f64>> {
+        let full = self.expand(u, lambda);
+        let obstacles = self.obstacles_at(lambda);
+        Ok(self
+            .pairs
+            .iter()
+            .map(|p| {
+                let x = self.x0[p.node] + Self::vec3(&full, p.node, 0);
+                obstacles[p.obstacle]
+                    .gap(&x)
+                    .map_or(f64::NAN, |g| g.h / p.law.switch_width())
+            })
+            .collect())
+    }
+
     fn residual(&mut self, u: &[f64], lambda: f64) -> Result<Vec<f64>> {
         let full = self.expand(u, lambda);
         self.check_inactive(&full, lambda)?;

@@ -4,5 +4,6 @@
 #[path = "../common/shell.rs"]
 mod shell_common;
 
+mod event_spring;
 mod plate_cylinder;
 mod propped_cantilever;

@@ -245,6 +245,7 @@ fn checkpoint_round_trips_bit_exactly_through_json() {
         u: awkward.to_vec(),
         lambda: 0.1 + 0.2,
         prev_dir: Some((awkward.iter().rev().copied().collect(), -1.0 / 7.0)),
+        prev_length: Some(0.1 + 0.2),
         stats,
     };
     let json = serde_json::to_string(&cp).unwrap();
