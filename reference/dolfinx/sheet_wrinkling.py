@@ -29,7 +29,8 @@
 # x = L held at u = (lambda * dx, 0, 0) (the shell's clamp of the
 # mid-surface and of the director: no rotation, no contraction of the end).
 #
-#     /usr/bin/python3 reference/dolfinx/sheet_wrinkling.py --lambda0 4 --n 40 80
+#     /usr/bin/python3 reference/dolfinx/sheet_wrinkling.py --quarter --lambda0 3 --n 20 40 60 80 --steps 2
+#     /usr/bin/python3 reference/dolfinx/sheet_wrinkling.py --quarter --lambda0 3 --n 100 --steps 2 --name wrinkling_n100
 #
 # writes reference/data/sheet-wrinkling/<name>.json (every mesh; the modes'
 # mu, their number of wrinkles across the width and where they sit).
