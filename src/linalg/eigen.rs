@@ -242,11 +242,42 @@ fn unit_start(start: Option<&[f64]>, n: usize) -> Vec<f64> {
     x
 }
 
+/// What [`smallest_eigenvalue`] did.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct InverseWork {
+    pub solves: usize,
+    pub iterations: usize,
+    /// Vectors iterated at the end (1, or [`CLUSTER_BLOCK`] after a switch).
+    pub block: usize,
+}
+
+/// Block size of [`smallest_eigenvalue`] once single-vector inverse
+/// iteration is seen to converge slowly (clustered eigenvalues nearest
+/// zero): the rate becomes |kappa_1 / kappa_5| instead of |kappa_1 / kappa_2|.
+pub const CLUSTER_BLOCK: usize = 4;
+
 /// The eigenvalue of smallest modulus of the symmetric A (factorized as
 /// `a`, products by `a_mul`) and its unit eigenvector, by inverse iteration
-/// from `start` (or a fixed vector) until the Rayleigh quotient changes by
-/// less than `tol` relative (at most `max_iter` solves). Returns
-/// (eigenvalue, vector, solves).
+/// from `start` (or a fixed vector) with Rayleigh–Ritz on the iterated
+/// block (Golub & Van Loan, *Matrix Computations*, 4th ed., §8.2.2 and
+/// §8.2.4, "orthogonal iteration" on A⁻¹).
+///
+/// Stopping test on the Ritz pair (theta, x) of smallest |theta| with
+/// residual r = A x − theta x: with one vector, the change of theta
+/// between iterations below `tol` |theta|; with a block, the Rayleigh
+/// quotient's error bound |r|² / gap below `tol` |theta| (gap: distance to
+/// the next Ritz value; Parlett, *The Symmetric Eigenvalue Problem*,
+/// Thm 11.7.1); or, in both, |r| below the absolute floor 100 eps |A| (|A|
+/// estimated by |A s| / |s| for a fixed vector s): theta is then within
+/// round-off of an eigenvalue (Bauer–Fike), and a relative test alone can
+/// never pass for an eigenvalue at round-off level (kappa at a located
+/// root).
+///
+/// One vector first; when the residual falls by less than a factor 2 per
+/// iteration from the fourth on (close eigenvalues nearest zero), the
+/// block grows to [`CLUSTER_BLOCK`] vectors (the current one and fixed
+/// start vectors). At most `max_iter` iterations; returns the last Ritz
+/// pair then.
 pub fn smallest_eigenvalue(
     a: &Factorization,
     a_mul: &dyn Fn(&[f64]) -> Vec<f64>,
@@ -254,22 +285,78 @@ pub fn smallest_eigenvalue(
     start: Option<&[f64]>,
     tol: f64,
     max_iter: usize,
-) -> Result<(f64, Vec<f64>, usize), String> {
-    let mut x = unit_start(start, n);
-    let mut kappa = f64::NAN;
+) -> Result<(f64, Vec<f64>, InverseWork), String> {
+    let probe = start_vectors(n, 1).pop().unwrap_or_default();
+    let a_norm = norm(&a_mul(&probe)) / norm(&probe).max(f64::MIN_POSITIVE);
+    let floor = 100.0 * f64::EPSILON * a_norm;
+    let mut x = vec![unit_start(start, n)];
+    let mut work = InverseWork::default();
+    let mut last = (f64::NAN, x[0].clone());
+    let mut previous_residual = f64::INFINITY;
     for it in 1..=max_iter {
-        let mut y = inverse_step(a, &x)?;
-        let s = norm(&y);
-        y.iter_mut().for_each(|v| *v /= s);
-        let ay = a_mul(&y);
-        let next = dot(&y, &ay);
-        x = y;
-        if (next - kappa).abs() <= tol * next.abs() {
-            return Ok((next, x, it));
+        work.iterations = it;
+        let mut y = x
+            .iter()
+            .map(|v| inverse_step(a, v))
+            .collect::<Result<Vec<_>, _>>()?;
+        work.solves += y.len();
+        orthonormalize(&mut y);
+        let ay: Vec<Vec<f64>> = y.iter().map(|v| a_mul(v)).collect();
+        let p = y.len();
+        let h = DMatrix::from_fn(p, p, |i, j| 0.5 * (dot(&y[i], &ay[j]) + dot(&y[j], &ay[i])));
+        let eig = h.symmetric_eigen();
+        let mut order: Vec<usize> = (0..p).collect();
+        order.sort_by(|&i, &j| {
+            eig.eigenvalues[i]
+                .abs()
+                .total_cmp(&eig.eigenvalues[j].abs())
+        });
+        let combine = |basis: &[Vec<f64>], col: usize| -> Vec<f64> {
+            let mut out = vec![0.0; n];
+            for (r, b) in basis.iter().enumerate() {
+                let w = eig.eigenvectors[(r, col)];
+                out.iter_mut().zip(b).for_each(|(o, v)| *o += w * v);
+            }
+            out
+        };
+        let theta = eig.eigenvalues[order[0]];
+        let xv = combine(&y, order[0]);
+        let av = combine(&ay, order[0]);
+        let residual = norm(
+            &av.iter()
+                .zip(&xv)
+                .map(|(a, x)| a - theta * x)
+                .collect::<Vec<_>>(),
+        );
+        let gap = order[1..]
+            .iter()
+            .map(|&j| (eig.eigenvalues[j] - theta).abs())
+            .fold(f64::INFINITY, f64::min);
+        // One vector: the Rayleigh quotient's change (its error is of the
+        // order of the change when converging linearly); a block: |r|² / gap.
+        let bound = if p == 1 {
+            (theta - last.0).abs()
+        } else if gap > residual {
+            residual * residual / gap
+        } else {
+            residual
+        };
+        // Ritz vectors as the next block (smallest |theta| first).
+        x = order.iter().map(|&j| combine(&y, j)).collect();
+        let s = norm(&x[0]);
+        last = (theta, x[0].iter().map(|v| v / s).collect());
+        if bound <= tol * theta.abs() || residual <= floor {
+            work.block = p;
+            return Ok((last.0, last.1, work));
         }
-        kappa = next;
+        if p == 1 && it >= 4 && residual > 0.5 * previous_residual && n > CLUSTER_BLOCK {
+            x.extend(start_vectors(n, CLUSTER_BLOCK).into_iter().skip(1));
+            x.truncate(CLUSTER_BLOCK);
+        }
+        previous_residual = residual;
     }
-    Ok((kappa, x, max_iter))
+    work.block = x.len();
+    Ok((last.0, last.1, work))
 }
 
 /// The real eigenvalue nearest zero of a general (non-symmetric) A and its
@@ -363,5 +450,40 @@ mod tests {
             .min_by(|x, y| x.abs().total_cmp(&y.abs()))
             .unwrap();
         assert!((k / exact - 1.0).abs() < 1e-9, "{k} vs {exact}");
+    }
+
+    #[test]
+    fn close_eigenvalues_nearest_zero_switch_to_a_block() {
+        // Diagonal with 1e-3 and 1.001e-3 nearest zero: one vector
+        // converges at the rate 0.999 per iteration; the block at 1e-3 / 0.5.
+        let m = 60;
+        let mut a = SparseMatrix::new(m);
+        for i in 0..m {
+            let d = match i {
+                7 => 1.001e-3,
+                23 => 1e-3,
+                _ => 0.5 + i as f64 * 0.01,
+            };
+            a.add(i, i, d);
+        }
+        let f = LinearSolver::default().factorize(&a).unwrap();
+        let (k, x, work) = smallest_eigenvalue(&f, &|x| a.mul_vec(x), m, None, 1e-12, 200).unwrap();
+        assert_eq!(work.block, CLUSTER_BLOCK);
+        assert!((k / 1e-3 - 1.0).abs() < 1e-10, "{k}");
+        assert!(x[23].abs() > 1.0 - 1e-6, "{}", x[23]);
+        assert!(work.iterations < 60, "{work:?}");
+    }
+
+    #[test]
+    fn an_eigenvalue_at_round_off_stops_at_the_absolute_floor() {
+        // The Laplacian shifted by its smallest eigenvalue: kappa ~ 1e-16,
+        // which no relative test on the Rayleigh quotient can pass.
+        let m = 50;
+        let e1 = 2.0 - 2.0 * (std::f64::consts::PI / (m + 1) as f64).cos();
+        let a = laplacian(m, -e1);
+        let f = LinearSolver::default().factorize(&a).unwrap();
+        let (k, _, work) = smallest_eigenvalue(&f, &|x| a.mul_vec(x), m, None, 1e-12, 200).unwrap();
+        assert!(k.abs() < 1e-12, "{k}");
+        assert!(work.iterations < 10, "{work:?}");
     }
 }

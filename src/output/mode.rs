@@ -135,6 +135,62 @@ pub fn wavelength(x0: &[Vec3], full: &[f64]) -> Option<Wavelength> {
     best
 }
 
+/// Where a mode's wrinkles sit and how many there are, on a flat mesh in
+/// the plane z = 0 with the mode's largest component uz: the nodal line
+/// across y (x = const) through |uz|max, read for its crests (sign changes
+/// of uz + 1, entries below 1e-3 of the maximum ignored), and the nodal
+/// line along x (y = const) through |uz|max, read for the range of x where
+/// |uz| exceeds half its maximum.
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct Wrinkles {
+    /// Crests across the width (wrinkles).
+    pub count: usize,
+    /// Position of |uz|max.
+    pub at: [f64; 2],
+    /// [x_min, x_max] where |uz| > max / 2 along x through |uz|max.
+    pub extent_x: [f64; 2],
+}
+
+/// The [`Wrinkles`] of the mode `full` on nodes `x0` (None when the mode's
+/// uz vanishes).
+pub fn wrinkles(x0: &[Vec3], full: &[f64]) -> Option<Wrinkles> {
+    let n = x0.len();
+    let uz = |i: usize| full[dof(i, 2)];
+    let top = (0..n).max_by(|&a, &b| uz(a).abs().total_cmp(&uz(b).abs()))?;
+    let big = uz(top).abs();
+    if big == 0.0 {
+        return None;
+    }
+    let size = x0
+        .iter()
+        .map(|x| x.amax())
+        .fold(0.0f64, f64::max)
+        .max(f64::MIN_POSITIVE);
+    let on = |i: usize, k: usize| (x0[i][k] - x0[top][k]).abs() <= 1e-9 * size;
+    let mut across: Vec<(f64, f64)> = (0..n)
+        .filter(|&i| on(i, 0))
+        .map(|i| (x0[i][1], uz(i)))
+        .collect();
+    across.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let signs: Vec<bool> = across
+        .iter()
+        .filter(|p| p.1.abs() > 1e-3 * big)
+        .map(|p| p.1 > 0.0)
+        .collect();
+    let count = 1 + signs.windows(2).filter(|w| w[0] != w[1]).count();
+    let along: Vec<f64> = (0..n)
+        .filter(|&i| on(i, 1) && uz(i).abs() > 0.5 * big)
+        .map(|i| x0[i][0])
+        .collect();
+    let lo = along.iter().copied().fold(f64::INFINITY, f64::min);
+    let hi = along.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    Some(Wrinkles {
+        count,
+        at: [x0[top][0], x0[top][1]],
+        extent_x: [lo, hi],
+    })
+}
+
 /// Writes the mode as a .vtu on the reference surface: point data `mode`
 /// (displacement part) and `mode_director` (director part), scaled by
 /// [`normalized`].

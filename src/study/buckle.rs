@@ -51,6 +51,8 @@ pub struct Mode {
     pub half_waves: Option<f64>,
     pub wavelength: Option<f64>,
     pub wave_direction: Option<String>,
+    /// Wrinkles of a flat sheet's mode ([`mode::wrinkles`]).
+    pub wrinkles: Option<mode::Wrinkles>,
     pub vtk: Option<String>,
     /// On the free unknowns, |phi| = 1.
     #[serde(skip)]
@@ -171,6 +173,7 @@ pub fn buckle(
             half_waves: wave.map(|w| w.half_waves),
             wavelength: wave.map(|w| w.wavelength),
             wave_direction: wave.map(|w| w.direction.to_string()),
+            wrinkles: mode::wrinkles(&model.x0, &full),
             vtk,
             vector: p.vector,
         });
@@ -224,10 +227,10 @@ pub fn table(r: &BuckleReport) -> String {
         "{}: linearized buckling about lambda = {} ({} dofs, {} path steps; {} iterations, {} vectors, {} solves, {:.3} s)\n",
         r.scene, r.lambda_base, r.dofs, r.path_steps, r.iterations, r.subspace, r.solves, r.wall_s
     );
-    s.push_str("| mode | mu | lambda_critical | residual | half-waves | wavelength |\n|---|---|---|---|---|---|\n");
+    s.push_str("| mode | mu | lambda_critical | residual | half-waves | wavelength | uz crests across y | at (x, y) | x where abs(uz) > max/2 |\n|---|---|---|---|---|---|---|---|---|\n");
     for m in &r.modes {
         s.push_str(&format!(
-            "| {} | {:.9e} | {:.9e} | {:.1e} | {} {} | {} |\n",
+            "| {} | {:.9e} | {:.9e} | {:.1e} | {} {} | {} | {} |\n",
             m.index,
             m.mu,
             m.lambda_critical,
@@ -235,6 +238,10 @@ pub fn table(r: &BuckleReport) -> String {
             m.half_waves.map_or("-".into(), |h| format!("{h:.3}")),
             m.wave_direction.clone().unwrap_or_default(),
             m.wavelength.map_or("-".into(), |w| format!("{w:.6}")),
+            m.wrinkles.map_or("- | - | -".into(), |w| format!(
+                "{} | ({:.4}, {:.4}) | {:.4}–{:.4}",
+                w.count, w.at[0], w.at[1], w.extent_x[0], w.extent_x[1]
+            )),
         ));
     }
     s

@@ -10,5 +10,6 @@ mod linear_macneal_harder;
 mod nonlinear_cantilevers;
 mod patch_macneal_harder;
 mod plate_buckling_dolfinx;
+mod sheet_wrinkling_dolfinx;
 mod step_cost;
 mod verification_scenes;
