@@ -8,7 +8,10 @@
 //! deviation of the positions from IDA at rtol = atol = 1e-10 on the output
 //! grid ([`super::bench::error`]; friction-roller up to 0.05 s before IDA's
 //! |v_s| reaches Vc); the roller's stop time against IDA's window
-//! [t(|v_s| = Vc), t(10 Vc)]; then the wall time at an error target
+//! [t(|v_s| = Vc), t(10 Vc)], and its located breakdown time t* against
+//! [t(10 Vc), t(peak |v_s|)] (the fold precedes the jump of the regularized
+//! dynamics; where the stop lands depends on the step sequence, t* does
+//! not: `tests/reference/ida.rs` (c)); then the wall time at an error target
 //! (default 1e-8, against IDA at rtol 1e-12): the fastest of the ANM at
 //! eps in `ANM_EPS` and of IDA at rtol in `IDA_RTOL` reaching it (minimum
 //! of `repeat` runs), and their ratio. Needs `--features reference`.
@@ -37,6 +40,10 @@ pub struct Cell {
     pub deviation: f64,
     /// IDA's window [t(Vc), t(10 Vc)] (roller).
     pub window: Option<(f64, f64)>,
+    /// The ANM's located singular time t*, and the time of IDA's largest
+    /// |v_s| (roller).
+    pub t_star: Option<f64>,
+    pub ida_peak: Option<f64>,
     pub anm_wall_s: f64,
     /// Fastest ANM (eps, wall, error) and IDA (rtol, wall, error) reaching
     /// the target, if any.
@@ -62,6 +69,11 @@ pub fn cell(case: &str, scene: &FrictionScene, target: f64, repeat: usize) -> Re
     let omega = scene.friction.omega;
     let ida10 = reference_ida(scene, 1e-10)?;
     let window = ida10.surge_window();
+    let ida_peak = ida10
+        .steps
+        .iter()
+        .max_by(|x, y| x.slip.abs().total_cmp(&y.slip.abs()))
+        .map(|s| s.t);
     let t_max = match (scene.kind, window) {
         (Kind::FrictionRoller, Some((t1, _))) => t1 - 0.05,
         _ => scene.t_end,
@@ -70,6 +82,7 @@ pub fn cell(case: &str, scene: &FrictionScene, target: f64, repeat: usize) -> Re
     let tight = from_reference(reference_ida(scene, 1e-12)?);
     let run = crate::model::friction_run::run(scene, None, false)?;
     let implicit_steps = run.implicit.steps;
+    let t_star = run.t_singular_estimate;
     let anm_wall_s = run.wall_s;
     let sol: Solution = run.into();
     let deviation = error(&sol, &ida10, t_max);
@@ -116,6 +129,8 @@ pub fn cell(case: &str, scene: &FrictionScene, target: f64, repeat: usize) -> Re
         t_stop: sol.t_stop,
         deviation,
         window,
+        t_star,
+        ida_peak,
         anm_wall_s,
         anm_fastest,
         ida_fastest,
@@ -126,7 +141,7 @@ pub fn cell(case: &str, scene: &FrictionScene, target: f64, repeat: usize) -> Re
 /// scene's own zeta and omega (the ratio's denominator).
 pub fn markdown(cells: &[Cell], paper: &[(String, usize)], target: f64) -> String {
     let mut s = format!(
-        "| scene | ζ (N) | ω | ANM steps (implicit) | / paper's | stop | vs IDA 1e-10 (positions) | roller stop in IDA window | ANM fastest at {target:.0e}: eps, ms | IDA fastest at {target:.0e}: rtol, ms | ANM / IDA |\n|---|---|---|---|---|---|---|---|---|---|---|\n"
+        "| scene | ζ (N) | ω | ANM steps (implicit) | / paper's | stop | vs IDA 1e-10 (positions) | roller stop in IDA window | roller t* in [IDA t(10 Vc), peak] | ANM fastest at {target:.0e}: eps, ms | IDA fastest at {target:.0e}: rtol, ms | ANM / IDA |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n"
     );
     for c in cells {
         let base = paper
@@ -147,6 +162,14 @@ pub fn markdown(cells: &[Cell], paper: &[(String, usize)], target: f64) -> Strin
             ),
             (true, None) => "no IDA window".into(),
         };
+        let breakdown = match (c.case.contains("roller"), c.window, c.t_star, c.ida_peak) {
+            (false, ..) => "–".to_string(),
+            (true, Some((_, t10)), Some(ts), Some(pk)) => format!(
+                "{} ({ts:.6} in [{t10:.6}, {pk:.6}])",
+                if ts >= t10 && ts <= pk { "yes" } else { "no" }
+            ),
+            _ => "no t* or IDA window".into(),
+        };
         let fast = |f: Option<(f64, f64, f64)>| match f {
             Some((x, w, e)) => format!("{x:.0e}, {:.3} (err {e:.1e})", 1e3 * w),
             None => "none reaches it".into(),
@@ -156,7 +179,7 @@ pub fn markdown(cells: &[Cell], paper: &[(String, usize)], target: f64) -> Strin
             _ => "–".into(),
         };
         s += &format!(
-            "| {} | {:.0e} | {:.0e} | {} ({}) | {:.2} | {} at {:.5} | {:.1e} | {} | {} | {} | {} |\n",
+            "| {} | {:.0e} | {:.0e} | {} ({}) | {:.2} | {} at {:.5} | {:.1e} | {} | {} | {} | {} | {} |\n",
             c.case,
             c.zeta,
             c.omega,
@@ -167,6 +190,7 @@ pub fn markdown(cells: &[Cell], paper: &[(String, usize)], target: f64) -> Strin
             c.t_stop,
             c.deviation,
             window,
+            breakdown,
             fast(c.anm_fastest),
             fast(c.ida_fastest),
             ratio
