@@ -125,6 +125,14 @@ impl IdaRun {
         self.steps.iter().filter(|s| s.order == 1).count()
     }
 
+    /// The step of largest |v_s| (the jump of the regularized dynamics past
+    /// the roller's breakdown), if any step was recorded.
+    pub fn slip_peak(&self) -> Option<&StepRecord> {
+        self.steps
+            .iter()
+            .max_by(|x, y| x.slip.abs().total_cmp(&y.slip.abs()))
+    }
+
     /// The window [t(|v_s| = Vc), t(|v_s| = 10 Vc)]: the first up-crossing of
     /// 10 Vc and the last up-crossing of Vc before it.
     pub fn surge_window(&self) -> Option<(f64, f64)> {

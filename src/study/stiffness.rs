@@ -69,11 +69,7 @@ pub fn cell(case: &str, scene: &FrictionScene, target: f64, repeat: usize) -> Re
     let omega = scene.friction.omega;
     let ida10 = reference_ida(scene, 1e-10)?;
     let window = ida10.surge_window();
-    let ida_peak = ida10
-        .steps
-        .iter()
-        .max_by(|x, y| x.slip.abs().total_cmp(&y.slip.abs()))
-        .map(|s| s.t);
+    let ida_peak = ida10.slip_peak().map(|s| s.t);
     let t_max = match (scene.kind, window) {
         (Kind::FrictionRoller, Some((t1, _))) => t1 - 0.05,
         _ => scene.t_end,

@@ -78,3 +78,20 @@ pub fn assert_rel(got: f64, want: f64, tol: f64, what: &str) {
         "{what}: got {got:.6e}, want {want:.6e}, relative error {err:.3e} > {tol:.1e}"
     );
 }
+
+/// A stored reference file (path from the crate root), parsed.
+pub fn stored_json(rel: &str) -> serde_json::Value {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(rel);
+    let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{rel}: {e}"));
+    serde_json::from_str(&text).unwrap_or_else(|e| panic!("{rel}: {e}"))
+}
+
+/// Stored reference data must be of the scene under test: `data[key]`
+/// equals `ours` to 1e-12 relative.
+pub fn assert_stored(data: &serde_json::Value, key: &str, ours: f64) {
+    let theirs = data[key].as_f64().unwrap_or(f64::NAN);
+    assert!(
+        (theirs - ours).abs() <= 1e-12 * ours.abs(),
+        "{key}: dolfinx {theirs}, scene {ours}"
+    );
+}

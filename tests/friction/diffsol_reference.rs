@@ -175,11 +175,7 @@ fn roller_stop_in_diffsol_window() {
         t1 <= t_stop && t_stop <= t10,
         "ANM stop {t_stop} outside diffsol's window [{t1}, {t10}]"
     );
-    let peak = b
-        .steps
-        .iter()
-        .max_by(|x, y| x.slip.abs().total_cmp(&y.slip.abs()))
-        .expect("diffsol steps");
+    let peak = b.slip_peak().expect("diffsol steps");
     let d = anm_run(&sc, None, false).unwrap_or_else(|e| panic!("ANM failed: {e}"));
     let t_star = d.t_singular_estimate.expect("ANM t* estimate");
     println!(

@@ -332,11 +332,7 @@ fn roller_breakdown_window() {
         t1 <= t_stop && t_stop <= t10,
         "ANM stop {t_stop} outside IDA's window [{t1}, {t10}]"
     );
-    let peak = b
-        .steps
-        .iter()
-        .max_by(|x, y| x.slip.abs().total_cmp(&y.slip.abs()))
-        .expect("IDA steps");
+    let peak = b.slip_peak().expect("IDA steps");
     let d = anm(&sc);
     let t_star = d.t_singular_estimate.expect("ANM t* estimate");
     println!(

@@ -10,6 +10,7 @@
 //! The hard-support solid (no edge twist) is printed for comparison. CI
 //! only reads the stored files.
 
+use crate::shell_common;
 use anm::scene::shell::{Load, load};
 use anm::study::buckle::buckle;
 use std::f64::consts::PI;
@@ -21,9 +22,7 @@ fn root() -> PathBuf {
 
 #[test]
 fn plate_buckling_stress_matches_the_dolfinx_slepc_solid() {
-    let text = std::fs::read_to_string(root().join("reference/data/plate-buckling/buckling.json"))
-        .expect("reference/data/plate-buckling/buckling.json");
-    let reference: serde_json::Value = serde_json::from_str(&text).expect("json");
+    let reference = shell_common::stored_json("reference/data/plate-buckling/buckling.json");
     let sigma_ref = reference["reference"]["sigma_cr_Pa"]
         .as_f64()
         .expect("reference.sigma_cr_Pa");
@@ -31,13 +30,7 @@ fn plate_buckling_stress_matches_the_dolfinx_slepc_solid() {
     let sc = load(&root().join("scenes/verification/plate-buckling.toml")).expect("scene");
     // The stored data must be of this scene: same E, nu, t and load.
     let data = &reference["data"];
-    let same = |key: &str, ours: f64| {
-        let theirs = data[key].as_f64().unwrap_or(f64::NAN);
-        assert!(
-            (theirs - ours).abs() <= 1e-12 * ours.abs(),
-            "{key}: dolfinx {theirs}, scene {ours}"
-        );
-    };
+    let same = |key: &str, ours: f64| shell_common::assert_stored(data, key, ours);
     same("young", sc.material.young);
     same("poisson", sc.material.poisson);
     same("thickness", sc.thickness);

@@ -12,6 +12,7 @@
 //! first mode even in y: crests across the width, where they sit) must
 //! agree too. CI only reads the stored files.
 
+use crate::shell_common;
 use anm::scene::shell::load;
 use anm::study::buckle::buckle;
 use std::path::PathBuf;
@@ -46,20 +47,11 @@ fn extrapolate(h: [f64; 3], f: [f64; 3]) -> (f64, f64) {
 
 #[test]
 fn sheet_wrinkling_matches_the_dolfinx_slepc_solid() {
-    let text =
-        std::fs::read_to_string(root().join("reference/data/sheet-wrinkling/wrinkling.json"))
-            .expect("reference/data/sheet-wrinkling/wrinkling.json");
-    let reference: serde_json::Value = serde_json::from_str(&text).expect("json");
+    let reference = shell_common::stored_json("reference/data/sheet-wrinkling/wrinkling.json");
     let sc = load(&root().join("scenes/sheet-wrinkling.toml")).expect("scene");
     // The stored data must be of this scene.
     let data = &reference["data"];
-    let same = |key: &str, ours: f64| {
-        let theirs = data[key].as_f64().unwrap_or(f64::NAN);
-        assert!(
-            (theirs - ours).abs() <= 1e-12 * ours.abs(),
-            "{key}: dolfinx {theirs}, scene {ours}"
-        );
-    };
+    let same = |key: &str, ours: f64| shell_common::assert_stored(data, key, ours);
     same("young", sc.material.young);
     same("poisson", sc.material.poisson);
     same("thickness", sc.thickness);
