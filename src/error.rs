@@ -95,6 +95,14 @@ pub enum Error {
         gap: f64,
         distance: f64,
     },
+    /// A run in time spent its step budget, or its steps collapsed: where
+    /// and what limits them.
+    #[error("{param} = {at:.9e}: {what}")]
+    TimeSteps {
+        param: &'static str,
+        at: f64,
+        what: String,
+    },
 }
 
 impl Error {
@@ -132,6 +140,7 @@ impl Error {
             Error::OffPath { .. } => "off_path",
             Error::Resume { .. } => "resume",
             Error::ContactMissed { .. } => "contact_missed",
+            Error::TimeSteps { .. } => "time_steps",
             Error::Interrupted { .. } => "interrupted",
         }
     }

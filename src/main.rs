@@ -742,6 +742,30 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
             let (kind, friction) = load(&scene)?;
             match kind {
                 Kind::Shell => {
+                    let sc = anm::scene::shell::load(&scene)?;
+                    if sc.friction.is_some() {
+                        for w in &sc.warnings {
+                            eprintln!("warning: {w}");
+                        }
+                        let r = anm::run::shell_time::run(&sc, Some(&out))
+                            .with_context(|| format!("running {}", scene.display()))?;
+                        println!(
+                            "{}: stop = {} at t = {:.6} s; {} steps, {} factorizations, {} corrections, {:.3} s; {} friction nodes; outputs in {}",
+                            scene.display(),
+                            r.stop,
+                            r.stop_t,
+                            r.steps,
+                            r.factorizations,
+                            r.corrections,
+                            r.wall_s,
+                            r.friction_nodes,
+                            out.display()
+                        );
+                        if let Some(n) = r.stop_node {
+                            println!("  singular point at node {n}");
+                        }
+                        return Ok(ExitCode::SUCCESS);
+                    }
                     // Ctrl-C / SIGTERM end a shell run at the next step end.
                     anm::run::interrupt::install();
                     // Under `mpirun -n P` (feature mumps) every rank runs

@@ -4,7 +4,8 @@
 //! - [`probe`]: the scene's named outputs evaluated at a state;
 //! - [`recorder`]: the output grid, the streamed CSV files, VTK, the
 //!   checkpoint that `anm run --resume` continues from;
-//! - [`shell`]: the run loop (ANM stepper, Newton baseline, linear solve).
+//! - [`shell`]: the run loop (ANM stepper, Newton baseline, linear solve);
+//! - [`shell_time`]: a shell scene with `[friction]`, integrated in time.
 //!
 //! A run stops at the next step end after Ctrl-C or SIGTERM
 //! ([`interrupt`]), with every file consistent with the last step.
@@ -14,5 +15,6 @@ pub mod interrupt;
 pub mod probe;
 pub mod recorder;
 pub mod shell;
+pub mod shell_time;
 
 pub use shell::{RunReport, Snapshot, run_loaded, run_scene};

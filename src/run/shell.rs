@@ -270,12 +270,12 @@ fn run_inner(
     resumed: Option<RunCheckpoint>,
 ) -> Result<RunReport> {
     if scene.friction.is_some() {
-        // The series in time of the shell with friction is issue 10 item 2:
-        // refuse rather than run the static path without friction.
+        // A scene with [friction] is a problem in time (run::shell_time):
+        // refuse the static path, which would drop the friction.
         return Err(Error::Invalid {
             file: scene.file.clone(),
             key: "friction".into(),
-            problem: "the shell with friction (a problem in time) cannot be solved by this build yet (issue 10 item 2); remove [friction] for the static path in lambda".into(),
+            problem: "a shell scene with [friction] is a problem in time: `anm run` solves it (run::shell_time); the static path in lambda and the studies built on it (audit, bench, stress, buckle) do not take friction".into(),
         });
     }
     let start = Instant::now();

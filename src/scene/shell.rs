@@ -164,6 +164,7 @@ struct RawFriction {
     t_end: f64,
     load_ramp: Option<[f64; 2]>,
     motion_ramp: Option<[f64; 2]>,
+    output_step: Option<f64>,
 }
 
 #[derive(Deserialize)]
@@ -256,6 +257,8 @@ pub struct FrictionSpec {
     pub t_end: f64,
     pub load: Ramp,
     pub motion: Ramp,
+    /// Rows of history.csv every `output_step` seconds.
+    pub output_step: f64,
 }
 
 /// What a probe measures.
@@ -1162,6 +1165,33 @@ fn friction(
         Motion::Translate { velocity } => velocity.norm() > 0.0,
         Motion::Rotate { omega } => omega != 0.0,
     });
+    for (i, o) in obstacles.iter().enumerate() {
+        if let Motion::Translate { velocity } = o.motion {
+            // In time the obstacle's shape stays where the scene puts it and
+            // only its surface velocity enters (friction); a translation that
+            // moves the surface would change the gaps too.
+            let off_surface = match &o.shape {
+                Obstacle::Plane { normal, .. } => velocity.dot(normal).abs(),
+                Obstacle::Cylinder { axis, .. } => velocity.cross(axis).norm(),
+            };
+            if off_surface > 1e-12 * velocity.norm() {
+                return Err(c.fail(
+                    &format!("obstacle[{i}].motion"),
+                    "with [friction], a translation must keep the obstacle's surface in place (along a plane, or along a cylinder's axis): a translation that moves the surface is not supported in time yet",
+                ));
+            }
+        }
+    }
+    let output_step = match fr.output_step {
+        Some(v) => c.positive("friction.output_step", v)?,
+        None => t_end / 100.0,
+    };
+    if t_end / output_step > 1e6 {
+        return Err(c.fail(
+            "friction.output_step",
+            format!("{output_step} s gives more than 1e6 rows up to t_end = {t_end} s"),
+        ));
+    }
     if !(moving || loaded && load.varies()) {
         return Err(c.fail(
             "friction",
@@ -1179,6 +1209,7 @@ fn friction(
         t_end,
         load,
         motion,
+        output_step,
     })
 }
 

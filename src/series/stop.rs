@@ -48,6 +48,7 @@ impl Stop {
                 | Error::NonFinite { param, at, .. }
                 | Error::StepCollapse { param, at, .. }
                 | Error::ContactMissed { param, at, .. }
+                | Error::TimeSteps { param, at, .. }
                     if *param == "lambda" =>
                 {
                     Some(*at)
@@ -201,6 +202,11 @@ pub fn clone_error(e: &Error) -> Error {
             obstacle: *obstacle,
             gap: *gap,
             distance: *distance,
+        },
+        Error::TimeSteps { param, at, what } => Error::TimeSteps {
+            param,
+            at: *at,
+            what: what.clone(),
         },
     }
 }

@@ -4,11 +4,14 @@
 //! series, and the assembled model that the ANM engine continues.
 
 pub mod element;
+pub mod friction_dae;
+pub mod friction_pair;
 pub mod kinematics;
 pub mod material;
 pub mod model;
 pub mod ramp;
 pub mod series;
+pub mod time_path;
 
 pub use element::ShellElement;
 pub use material::Material;

@@ -10,4 +10,5 @@ mod plane_closed_form;
 mod reference_cli;
 mod roller_breakdown;
 mod shell_friction_law;
+mod shell_in_time;
 mod stiff_linear;

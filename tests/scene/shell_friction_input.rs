@@ -204,12 +204,28 @@ fn a_motion_only_friction_feels_warns_without_friction() {
         ],
     );
     assert!(load(&p).unwrap().warnings.is_empty());
-    // The same scene with [friction] is a problem in time, which `anm run`
-    // refuses clearly until the series in time exists (issue 10 item 2).
+    // The same scene with [friction] is a problem in time: the static path
+    // refuses it rather than drop the friction.
     let s = load(Path::new(BASE)).unwrap();
     let e = anm::run::shell::run_loaded(&s, None, false).unwrap_err();
     assert!(
         matches!(&e, Error::Invalid { key, .. } if key == "friction"),
         "{e}"
     );
+}
+
+#[test]
+fn in_time_a_translation_must_keep_the_surface_in_place() {
+    // The obstacle's shape stays where the scene puts it in time; a
+    // translation out of its surface would change the gaps.
+    let p = scene(
+        "rising-floor-friction.toml",
+        &[("velocity = [0.1, 0.0, 0.0]", "velocity = [0.0, 0.0, 0.01]")],
+    );
+    expect_invalid(&p, "obstacle[0].motion", "surface");
+    let p = scene(
+        "output-step.toml",
+        &[("t_end = 2.0\n", "t_end = 2.0\noutput_step = -1.0\n")],
+    );
+    expect_invalid(&p, "friction.output_step", "> 0");
 }

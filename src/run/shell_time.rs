@@ -1,0 +1,234 @@
+//! `anm run` on a shell scene with `[friction]`: the path in time
+//! ([`crate::shell::time_path`]) and its files.
+//!
+//! - history.csv: t, lambda (the load ramp), the scene's probes, then
+//!   rn_total (Σ R_N of the friction nodes), ft_x, ft_y, ft_z (Σ R_T) and
+//!   max_slip (largest |v_s|);
+//! - friction.csv: per friction node at t_end (or the stop): gap, R_N,
+//!   R_T, v_s, |v_s| and `slip` (|v_s| > 10 omega Vc) or `stick`;
+//! - summary.json: counters, the stop and the last row.
+
+use super::build::build_model;
+use super::probe::{self, State};
+use crate::contact::Motion;
+use crate::error::{Error, Result};
+use crate::scene::shell::ShellScene;
+use crate::series::ContinuationProblem;
+use crate::shell::friction_dae::{FrictionDae, TimeLaws};
+use crate::shell::time_path::{self, TimeConfig, TimeRun, TimeSample, TimeStop};
+use serde::Serialize;
+use std::collections::BTreeMap;
+use std::path::Path;
+use std::time::Instant;
+
+/// What a run in time reports.
+#[derive(Clone, Debug, Serialize)]
+pub struct TimeReport {
+    pub scene: String,
+    pub dofs: usize,
+    pub friction_nodes: usize,
+    /// Contact nodes left without friction (a fixed translation), 1-based.
+    pub nodes_without_friction: Vec<usize>,
+    pub steps: usize,
+    pub factorizations: usize,
+    pub corrections: usize,
+    pub max_residual: f64,
+    pub wall_s: f64,
+    /// "end" or "singularity".
+    pub stop: String,
+    pub stop_t: f64,
+    /// 1-based node of a singularity.
+    pub stop_node: Option<usize>,
+    /// The columns of history.csv at its last row.
+    pub end: BTreeMap<String, f64>,
+}
+
+/// The model and laws of a friction scene, ready to integrate.
+pub fn problem(scene: &ShellScene) -> Result<FrictionDae> {
+    let fr = scene.friction.as_ref().ok_or_else(|| Error::Invalid {
+        file: scene.file.clone(),
+        key: "friction".into(),
+        problem: "a run in time needs [friction]".into(),
+    })?;
+    let mut model = build_model(scene)?;
+    model.length_scale = scene.length_scale;
+    // The obstacles keep their place (scene::shell checks that a
+    // translation keeps the surface in place); their motion enters the
+    // surface velocity only.
+    let motions: Vec<Motion> = scene.obstacles.iter().map(|o| o.motion).collect();
+    model.set_motions(vec![Motion::Fixed; motions.len()]);
+    let laws = TimeLaws {
+        law: fr.law,
+        load: fr.load,
+        motion: fr.motion,
+        motions,
+    };
+    Ok(FrictionDae::new(model, laws, scene.solver.order))
+}
+
+/// The settings of the scene's `[solver]` and `[friction]` tables.
+pub fn config(scene: &ShellScene) -> TimeConfig {
+    let fr = scene.friction.as_ref().expect("a friction scene");
+    let rows = (fr.t_end / fr.output_step).round().max(1.0) as usize;
+    let mut outputs: Vec<f64> = (1..=rows)
+        .map(|i| (i as f64 * fr.output_step).min(fr.t_end))
+        .collect();
+    if outputs.last().is_none_or(|&t| t < fr.t_end) {
+        outputs.push(fr.t_end);
+    }
+    outputs.dedup();
+    TimeConfig {
+        order: scene.solver.order,
+        eps: scene.solver.eps,
+        t_end: fr.t_end,
+        max_steps: scene.solver.max_steps,
+        residual_tol: scene.solver.residual_tol,
+        max_corrections: scene.solver.max_corrections,
+        min_step: scene.solver.min_step * fr.t_end,
+        outputs,
+    }
+}
+
+/// Solves a friction scene in time (no files).
+pub fn solve(scene: &ShellScene) -> Result<(TimeRun, FrictionDae)> {
+    let mut dae = problem(scene)?;
+    let run = time_path::run(&mut dae, &config(scene))?;
+    Ok((run, dae))
+}
+
+/// Columns of history.csv after t and lambda: the probes, then the
+/// friction totals.
+fn row(dae: &FrictionDae, scene: &ShellScene, s: &TimeSample) -> Result<Vec<f64>> {
+    let state = State {
+        full: &s.full,
+        lambda: s.lambda,
+        arclength: f64::NAN,
+    };
+    let mut v = vec![s.t, s.lambda];
+    v.extend(probe::evaluate(&dae.model, &scene.probes, &state)?);
+    let rn: f64 = s.friction.iter().map(|f| f.rn).sum();
+    let ft = s
+        .friction
+        .iter()
+        .fold(nalgebra::Vector3::zeros(), |a, f| a + f.force);
+    let slip = s.friction.iter().map(|f| f.slip.norm()).fold(0.0, f64::max);
+    v.extend([rn, ft[0], ft[1], ft[2], slip]);
+    Ok(v)
+}
+
+fn header(scene: &ShellScene) -> Vec<String> {
+    let mut h = vec!["t".to_string(), "lambda".to_string()];
+    h.extend(scene.probes.iter().map(|p| p.name.clone()));
+    h.extend(["rn_total", "ft_x", "ft_y", "ft_z", "max_slip"].map(String::from));
+    h
+}
+
+fn write_err(file: &Path) -> impl Fn(String) -> Error + '_ {
+    move |problem| Error::Write {
+        file: file.to_path_buf(),
+        problem,
+    }
+}
+
+/// Runs a friction scene in time; writes its files into `out_dir`.
+pub fn run(scene: &ShellScene, out_dir: Option<&Path>) -> Result<TimeReport> {
+    let start = Instant::now();
+    let (run, dae) = solve(scene)?;
+    let wall_s = start.elapsed().as_secs_f64();
+    let head = header(scene);
+    let rows: Vec<Vec<f64>> = run
+        .samples
+        .iter()
+        .map(|s| row(&dae, scene, s))
+        .collect::<Result<_>>()?;
+    if let Some(r) = rows.iter().flatten().find(|v| !v.is_finite()) {
+        return Err(Error::NonFinite {
+            step: run.stats.steps,
+            param: "t",
+            at: run.samples.last().map_or(0.0, |s| s.t),
+            what: format!("an output value ({r})"),
+        });
+    }
+    let last = run.samples.last().expect("the sample at t = 0");
+    let (stop, stop_t, stop_node) = match run.stop {
+        TimeStop::End => ("end", last.t, None),
+        TimeStop::Singularity { t, node } => ("singularity", t, Some(node + 1)),
+    };
+    let report = TimeReport {
+        scene: scene.file.display().to_string(),
+        dofs: dae.model.ndof(),
+        friction_nodes: last.friction.len(),
+        nodes_without_friction: run.skipped.iter().map(|n| n + 1).collect(),
+        steps: run.stats.steps,
+        factorizations: run.stats.factorizations,
+        corrections: run.stats.corrections,
+        max_residual: run.stats.max_residual,
+        wall_s,
+        stop: stop.into(),
+        stop_t,
+        stop_node,
+        end: head
+            .iter()
+            .cloned()
+            .zip(rows.last().cloned().unwrap_or_default())
+            .collect(),
+    };
+    if let Some(dir) = out_dir {
+        std::fs::create_dir_all(dir).map_err(|source| Error::Io {
+            file: dir.to_path_buf(),
+            source,
+        })?;
+        let file = dir.join("history.csv");
+        let mut w = csv::Writer::from_path(&file).map_err(|e| write_err(&file)(e.to_string()))?;
+        w.write_record(&head)
+            .map_err(|e| write_err(&file)(e.to_string()))?;
+        for r in &rows {
+            w.write_record(r.iter().map(|v| format!("{v:.12e}")))
+                .map_err(|e| write_err(&file)(e.to_string()))?;
+        }
+        w.flush().map_err(|e| write_err(&file)(e.to_string()))?;
+        let file = dir.join("friction.csv");
+        let mut w = csv::Writer::from_path(&file).map_err(|e| write_err(&file)(e.to_string()))?;
+        let law = dae.laws.law;
+        w.write_record([
+            "node",
+            "obstacle",
+            "gap",
+            "rn",
+            "ft_x",
+            "ft_y",
+            "ft_z",
+            "vs_x",
+            "vs_y",
+            "vs_z",
+            "slip_speed",
+            "state",
+        ])
+        .map_err(|e| write_err(&file)(e.to_string()))?;
+        for f in &last.friction {
+            let speed = f.slip.norm();
+            let state = if speed > 10.0 * law.omega * law.vc {
+                "slip"
+            } else {
+                "stick"
+            };
+            let mut rec = vec![(f.node + 1).to_string(), f.obstacle.to_string()];
+            rec.extend(
+                [
+                    f.gap, f.rn, f.force[0], f.force[1], f.force[2], f.slip[0], f.slip[1],
+                    f.slip[2], speed,
+                ]
+                .map(|v| format!("{v:.12e}")),
+            );
+            rec.push(state.into());
+            w.write_record(&rec)
+                .map_err(|e| write_err(&file)(e.to_string()))?;
+        }
+        w.flush().map_err(|e| write_err(&file)(e.to_string()))?;
+        let file = dir.join("summary.json");
+        let text =
+            serde_json::to_string_pretty(&report).map_err(|e| write_err(&file)(e.to_string()))?;
+        std::fs::write(&file, text).map_err(|source| Error::Io { file, source })?;
+    }
+    Ok(report)
+}

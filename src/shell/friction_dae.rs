@@ -1,0 +1,402 @@
+//! The shell with regularized friction: an index-1 DAE in time (issue 10
+//! item 2, DESIGN §7), expanded in Taylor series with one sparse
+//! factorization per step.
+//!
+//! Unknowns: the free dofs U(t) of the shell and, at each friction node i
+//! (an active contact pair, one obstacle per node), w_i = (t_1·ẋ_i, t_2·ẋ_i),
+//! its velocity in the obstacle's tangent frame ([`super::friction_pair`]):
+//!
+//!   E(U, w, t) = R(U, λ(t)) − Σ_i R_T,i(x_i, w_i, m(t)) = 0   (equilibrium)
+//!   t_a(x_i)·ẋ_i − w_i,a = 0,  a = 1, 2                        (kinematics)
+//!
+//! with R the static residual of [`super::model`] (elements, loads, the normal
+//! law of eq. 3), λ(t) the load ramp and m(t) the motion ramp. The normal
+//! position of a contact node is algebraic (the normal law), its tangential
+//! position differential; dR_T/dw is invertible wherever |R_N|_reg > 0
+//! (zeta > 0), so the DAE has index 1.
+//!
+//! Series in a = t − t0 (U = Σ U_k a^k, w = Σ w_k a^k). Order k ≥ 1 of the
+//! equilibrium and order k − 1 of the kinematics give, with J the Jacobian
+//! at the step start (one factorization for every order):
+//!
+//!   [K − ∂R_T/∂x   −∂R_T/∂w] [U_k]   [−R_λ λ_k − S_k + R̃_T,k                       ]
+//!   [  T_0 S           0   ] [w_k] = [(w_{k−1} − Σ_{j=1}^{k−1} T_j·(k−j) x_{k−j}) / k]
+//!
+//! S_k = ContinuationProblem::series_rhs (order k of R with U_k = λ_k = 0),
+//! R̃_T,k = order k of R_T with x_k = w_k = 0 (the tape), T_j the series of
+//! the frame rows and S the node's translation dofs. The kinematic rows are
+//! scaled by a typical diagonal entry of K.
+
+use super::friction_pair::{self, FrictionPair};
+use super::model::ShellModel;
+use super::ramp::Ramp;
+use crate::contact::{FrictionLaw, Motion};
+use crate::error::{Error, Result};
+use crate::fe::dof::index as dof;
+use crate::linalg::{Factorization, LinearSolver, SparseMatrix, norm};
+use crate::series::ContinuationProblem;
+use nalgebra::Vector3;
+
+/// The time functions and the friction law of a run.
+#[derive(Clone, Debug)]
+pub struct TimeLaws {
+    pub law: FrictionLaw,
+    /// Scales loads and prescribed values (the static model's lambda).
+    pub load: Ramp,
+    /// Scales the obstacles' surface velocities.
+    pub motion: Ramp,
+    /// The obstacles' motions at full ramp (m/s, rad/s).
+    pub motions: Vec<Motion>,
+}
+
+/// The state at a step start: t, the free dofs and the tangential velocity
+/// unknowns of every contact pair of the model (zero where inactive).
+#[derive(Clone, Debug)]
+pub struct TimeState {
+    pub t: f64,
+    pub u: Vec<f64>,
+    pub w: Vec<[f64; 2]>,
+}
+
+/// The series of one step: U_k and, per friction pair of the step, w_k.
+pub struct StepSeries {
+    pub u: Vec<Vec<f64>>,
+    /// w[k][2 i + a].
+    pub w: Vec<Vec<f64>>,
+}
+
+pub struct FrictionDae {
+    pub model: ShellModel,
+    pub laws: TimeLaws,
+    order: usize,
+    solver: LinearSolver,
+    /// Friction nodes of the current step.
+    pairs: Vec<FrictionPair>,
+    /// Free translation dofs of each friction node.
+    node_dofs: Vec<[usize; 3]>,
+    rl: Vec<f64>,
+    factor: Option<Factorization>,
+    row_scale: f64,
+    /// Contact nodes left without friction (a fixed translation).
+    pub skipped: Vec<usize>,
+    pub factorizations: usize,
+}
+
+impl FrictionDae {
+    /// The model must hold its obstacles fixed (their motion only enters the
+    /// surface velocity: `laws.motions`).
+    pub fn new(model: ShellModel, laws: TimeLaws, order: usize) -> Self {
+        Self {
+            model,
+            laws,
+            order,
+            solver: LinearSolver::default(),
+            pairs: vec![],
+            node_dofs: vec![],
+            rl: vec![],
+            factor: None,
+            row_scale: 1.0,
+            skipped: vec![],
+            factorizations: 0,
+        }
+    }
+
+    pub fn n_pairs(&self) -> usize {
+        self.pairs.len()
+    }
+
+    /// The friction pairs of the current step (model pair index, node).
+    pub fn step_pairs(&self) -> impl Iterator<Item = (usize, usize)> + '_ {
+        self.pairs.iter().map(|p| (p.pair, p.node))
+    }
+
+    fn lambda(&self, t: f64) -> [f64; 2] {
+        [self.laws.load.value(t), self.laws.load.rate(t)]
+    }
+
+    fn motion_factor(&self, t: f64) -> [f64; 2] {
+        [self.laws.motion.value(t), self.laws.motion.rate(t)]
+    }
+
+    /// Node position x = X + v from a full vector.
+    fn position(&self, full: &[f64], node: usize) -> Vector3<f64> {
+        self.model.x0[node]
+            + Vector3::new(full[dof(node, 0)], full[dof(node, 1)], full[dof(node, 2)])
+    }
+
+    /// Linearizes at the state: the static tangent, the friction tapes of
+    /// the active pairs, the augmented matrix and its factorization. Errors
+    /// name the node of a problem.
+    pub fn linearize(&mut self, s: &TimeState) -> Result<()> {
+        let [lam0, _] = self.lambda(s.t);
+        let [m0, _] = self.motion_factor(s.t);
+        let (k, rl) = self.model.tangent(&s.u, lam0)?;
+        self.rl = rl;
+        let full = self.model.expand(&s.u, lam0);
+        self.pairs.clear();
+        self.node_dofs.clear();
+        self.skipped.clear();
+        let mut seen = std::collections::HashMap::new();
+        for &ip in self.model.active_pairs() {
+            let pair = &self.model.pairs[ip];
+            let free: Vec<Option<usize>> =
+                (0..3).map(|c| self.model.free[dof(pair.node, c)]).collect();
+            if free.iter().any(|f| f.is_none()) {
+                self.skipped.push(pair.node);
+                continue;
+            }
+            if let Some(other) = seen.insert(pair.node, pair.obstacle) {
+                return Err(Error::NonFinite {
+                    step: 0,
+                    param: "t",
+                    at: s.t,
+                    what: format!(
+                        "contact node {} is within the search distance of obstacles {other} and {}: friction needs one obstacle per node (reduce contact.search_distance)",
+                        pair.node + 1,
+                        pair.obstacle
+                    ),
+                });
+            }
+            let ob = &self.model.obstacles[pair.obstacle];
+            let x = self.position(&full, pair.node);
+            let h0 = ob.gap(&x).map(|g| g.h).ok_or_else(|| Error::NonFinite {
+                step: 0,
+                param: "t",
+                at: s.t,
+                what: format!(
+                    "contact gap of node {} (on the obstacle axis)",
+                    pair.node + 1
+                ),
+            })?;
+            let mut fp = FrictionPair::new(
+                ip,
+                pair.node,
+                pair.obstacle,
+                ob,
+                &self.laws.motions[pair.obstacle],
+                &pair.law,
+                &self.laws.law,
+                h0,
+                self.order,
+            );
+            let w = s.w[ip];
+            fp.tape.eval(&[x[0], x[1], x[2], w[0], w[1], m0]);
+            self.node_dofs
+                .push(std::array::from_fn(|c| free[c].expect("checked free")));
+            self.pairs.push(fp);
+        }
+        let n = self.model.ndof();
+        let np = self.pairs.len();
+        let mut a = SparseMatrix::new(n + 2 * np);
+        let mut diag = 0.0f64;
+        for (r, c, v) in k.entries() {
+            a.add(r, c, v);
+            if r == c {
+                diag = diag.max(v.abs());
+            }
+        }
+        self.row_scale = if diag > 0.0 { diag } else { 1.0 };
+        for (i, fp) in self.pairs.iter().enumerate() {
+            let jac = fp
+                .tape
+                .jacobian(&[0, 1, 2, friction_pair::W, friction_pair::W + 1]);
+            let dofs = self.node_dofs[i];
+            for r in 0..3 {
+                for c in 0..3 {
+                    a.add(dofs[r], dofs[c], -jac[friction_pair::FORCE + r][c]);
+                }
+                for c in 0..2 {
+                    a.add(
+                        dofs[r],
+                        n + 2 * i + c,
+                        -jac[friction_pair::FORCE + r][3 + c],
+                    );
+                }
+            }
+            for (row, slot) in [friction_pair::T1, friction_pair::T2]
+                .into_iter()
+                .enumerate()
+            {
+                let t = fp.out3(slot, 0);
+                for c in 0..3 {
+                    a.add(n + 2 * i + row, dofs[c], self.row_scale * t[c]);
+                }
+            }
+        }
+        let f = self
+            .solver
+            .factorize(&a)
+            .map_err(|e| Error::SingularMatrix {
+                step: 0,
+                param: "t",
+                at: s.t,
+                detail: format!("tangent of the shell with friction: {e}"),
+            })?;
+        self.factorizations += 1;
+        self.factor = Some(f);
+        Ok(())
+    }
+
+    /// Equilibrium residual E(U, w, t) on the free dofs at the state (the
+    /// tapes of the last linearization are re-evaluated at it).
+    pub fn residual(&mut self, s: &TimeState) -> Result<Vec<f64>> {
+        let [lam0, _] = self.lambda(s.t);
+        let [m0, _] = self.motion_factor(s.t);
+        let mut r = self.model.residual(&s.u, lam0)?;
+        let full = self.model.expand(&s.u, lam0);
+        for (i, fp) in self.pairs.iter_mut().enumerate() {
+            let x = self.model.x0[fp.node]
+                + Vector3::new(
+                    full[dof(fp.node, 0)],
+                    full[dof(fp.node, 1)],
+                    full[dof(fp.node, 2)],
+                );
+            let w = s.w[fp.pair];
+            let out = fp.tape.eval(&[x[0], x[1], x[2], w[0], w[1], m0]);
+            for c in 0..3 {
+                r[self.node_dofs[i][c]] -= out[friction_pair::FORCE + c];
+            }
+        }
+        Ok(r)
+    }
+
+    /// Scale of the residual test: |R_λ| (loads and prescribed values) plus
+    /// the sum of the normal reactions of the friction nodes.
+    pub fn force_scale(&self) -> f64 {
+        let rn: f64 = self
+            .pairs
+            .iter()
+            .map(|fp| fp.tape.output(friction_pair::RN, 0).abs())
+            .sum();
+        norm(&self.rl) + rn
+    }
+
+    /// The Newton direction at fixed tangential positions,
+    /// [J] [δU; δw] = [−E; 0], applied to `s` with the factor `alpha`.
+    pub fn newton_direction(&self, s: &TimeState, residual: &[f64]) -> Result<Vec<f64>> {
+        let n = self.model.ndof();
+        let mut rhs = vec![0.0; n + 2 * self.pairs.len()];
+        for (r, e) in rhs.iter_mut().zip(residual) {
+            *r = -e;
+        }
+        self.solve(&rhs, s.t)
+    }
+
+    /// `s` moved by alpha times a direction of [`FrictionDae::newton_direction`].
+    pub fn moved(&self, s: &TimeState, d: &[f64], alpha: f64) -> TimeState {
+        let n = self.model.ndof();
+        let mut out = s.clone();
+        for (u, du) in out.u.iter_mut().zip(d) {
+            *u += alpha * du;
+        }
+        for (i, fp) in self.pairs.iter().enumerate() {
+            out.w[fp.pair][0] += alpha * d[n + 2 * i];
+            out.w[fp.pair][1] += alpha * d[n + 2 * i + 1];
+        }
+        out
+    }
+
+    fn solve(&self, rhs: &[f64], t: f64) -> Result<Vec<f64>> {
+        let f = self.factor.as_ref().expect("linearize before solving");
+        let x = f.solve(rhs);
+        if x.iter().all(|v| v.is_finite()) {
+            Ok(x)
+        } else {
+            Err(Error::SingularMatrix {
+                step: 0,
+                param: "t",
+                at: t,
+                detail: "the solve of the shell with friction gave non-finite values".into(),
+            })
+        }
+    }
+
+    /// The Taylor series of U and w at the linearized state, orders 0..=N.
+    pub fn series(&mut self, s: &TimeState) -> Result<StepSeries> {
+        let n = self.model.ndof();
+        let np = self.pairs.len();
+        let order = self.order;
+        let lam = {
+            let [l0, l1] = self.lambda(s.t);
+            let mut v = vec![0.0; order + 1];
+            v[0] = l0;
+            if order >= 1 {
+                v[1] = l1;
+            }
+            v
+        };
+        let [_, m1] = self.motion_factor(s.t);
+        let mut us = vec![s.u.clone()];
+        let mut ws = vec![
+            (0..np)
+                .flat_map(|i| s.w[self.pairs[i].pair])
+                .collect::<Vec<f64>>(),
+        ];
+        // Full vectors of the orders (prescribed values at λ_k).
+        let mut fulls = vec![self.model.expand(&s.u, lam[0])];
+        for k in 1..=order {
+            let mut rhs = vec![0.0; n + 2 * np];
+            let sk = if k >= 2 {
+                self.model.series_rhs(k, &us, &lam[..k])?
+            } else {
+                vec![0.0; n]
+            };
+            for i in 0..n {
+                rhs[i] = -self.rl[i] * lam[k] - sk[i];
+            }
+            for (i, fp) in self.pairs.iter_mut().enumerate() {
+                for c in 0..5 {
+                    fp.tape.set_input(c, k, 0.0);
+                }
+                fp.tape
+                    .set_input(friction_pair::M, k, if k == 1 { m1 } else { 0.0 });
+                fp.tape.propagate(k);
+                let f = fp.out3(friction_pair::FORCE, k);
+                for c in 0..3 {
+                    rhs[self.node_dofs[i][c]] += f[c];
+                }
+                for (row, slot) in [friction_pair::T1, friction_pair::T2]
+                    .into_iter()
+                    .enumerate()
+                {
+                    let mut known = ws[k - 1][2 * i + row];
+                    for j in 1..k {
+                        let t = fp.out3(slot, j);
+                        let xf = &fulls[k - j];
+                        let x = Vector3::new(
+                            xf[dof(fp.node, 0)],
+                            xf[dof(fp.node, 1)],
+                            xf[dof(fp.node, 2)],
+                        );
+                        known -= t.dot(&x) * (k - j) as f64;
+                    }
+                    rhs[n + 2 * i + row] = self.row_scale * known / k as f64;
+                }
+            }
+            let z = self.solve(&rhs, s.t)?;
+            let uk = z[..n].to_vec();
+            let wk = z[n..].to_vec();
+            let full_k = self.model.expand(&uk, lam[k]);
+            for (i, fp) in self.pairs.iter_mut().enumerate() {
+                for c in 0..3 {
+                    fp.tape.set_input(c, k, full_k[dof(fp.node, c)]);
+                }
+                fp.tape.set_input(friction_pair::W, k, wk[2 * i]);
+                fp.tape.set_input(friction_pair::W + 1, k, wk[2 * i + 1]);
+                fp.tape.propagate(k);
+            }
+            us.push(uk);
+            ws.push(wk);
+            fulls.push(full_k);
+        }
+        Ok(StepSeries { u: us, w: ws })
+    }
+
+    /// Writes the w of the step's pairs from a flat per-step vector into
+    /// the per-model-pair state.
+    pub fn scatter_w(&self, flat: &[f64], w: &mut [[f64; 2]]) {
+        for (i, fp) in self.pairs.iter().enumerate() {
+            w[fp.pair] = [flat[2 * i], flat[2 * i + 1]];
+        }
+    }
+}

@@ -1,0 +1,111 @@
+//! The shell with regularized friction in time (issue 10 items 2, 3b)
+//! against closed forms of eqs. (5), (6), (11):
+//! - sliding plate (full slip at the plane's speed V): the held edge's
+//!   reaction, an elastic support force, equals f N |V|_reg^(q−1) V / Vc^q
+//!   with N = p A − the edge's z reaction, for q = 0, 0.5, 1;
+//! - creeping plate (pulled by T below f N on a fixed plane): it creeps as a
+//!   rigid body at v = omega Vc (T/N) / sqrt(f² − (T/N)²), the speed where
+//!   the regularized Coulomb law carries T.
+
+use anm::run::shell_time;
+use anm::scene::shell::load;
+use std::path::Path;
+
+fn scene(name: &str) -> anm::scene::shell::ShellScene {
+    load(Path::new(&format!("scenes/verification/{name}.toml"))).expect("scene loads")
+}
+
+/// Column of history.csv's row from the report's `end`.
+fn end(r: &shell_time::TimeReport, key: &str) -> f64 {
+    *r.end.get(key).unwrap_or_else(|| panic!("no column {key}"))
+}
+
+#[test]
+fn sliding_plate_carries_the_full_slip_friction_force() {
+    let pressure = 1e4;
+    let area = 0.2 * 0.1;
+    println!("| q | steps | reaction_x (N) | f N g(V) (N) | rel. diff | ft_y / ft_x |");
+    println!("|---|---|---|---|---|---|");
+    for q in [0.0, 0.5, 1.0] {
+        let mut sc = scene("sliding-plate");
+        let fr = sc.friction.as_mut().expect("a friction scene");
+        fr.law.q = q;
+        let law = fr.law;
+        let r = shell_time::run(&sc, None).expect("runs to t_end");
+        assert_eq!(r.stop, "end");
+        let v = 0.01;
+        let slip = (v * v + (law.omega * law.vc).powi(2)).sqrt();
+        let normal = pressure * area - end(&r, "reaction_z");
+        let expected = law.f * normal * slip.powf(q - 1.0) * v / law.vc.powf(q);
+        let reaction = -end(&r, "reaction_x");
+        let rel = (reaction - expected).abs() / expected;
+        let across = end(&r, "ft_y").abs() / end(&r, "ft_x").abs();
+        println!(
+            "| {q} | {} | {reaction:.6} | {expected:.6} | {rel:.1e} | {across:.1e} |",
+            r.steps
+        );
+        assert!(rel <= 5e-3, "q = {q}: {reaction} N vs {expected} N");
+        // Along V: the friction on the plate points +x, nothing across.
+        assert!(
+            end(&r, "ft_x") > 0.0 && across <= 1e-9,
+            "q = {q}: ft_y / ft_x = {across}"
+        );
+        // The contact nodes carry the pressure the support does not.
+        let rn = end(&r, "rn_total");
+        assert!(
+            (rn - normal).abs() <= 1e-6 * normal,
+            "Σ R_N {rn} vs {normal}"
+        );
+    }
+}
+
+#[test]
+fn creeping_plate_slips_at_the_regularization_speed() {
+    let sc = scene("creeping-plate");
+    let law = sc.friction.as_ref().expect("friction").law;
+    let (pressure, area, pull) = (1e4, 0.2 * 0.1, 200.0 * 0.1);
+    let (mut run, _) = shell_time::solve(&sc).expect("runs to t_end");
+    let ratio = pull / (pressure * area);
+    let creep = law.omega * law.vc * ratio / (law.f * law.f - ratio * ratio).sqrt();
+    // The plate's speed from its displacement between the last two outputs.
+    let s1 = run.samples.pop().expect("samples");
+    let s0 = run.samples.pop().expect("samples");
+    let node = (0..sc.mesh.nodes.len())
+        .find(|&i| (sc.mesh.nodes[i] - nalgebra::Vector3::new(0.1, 0.0, 0.0)).norm() < 1e-9)
+        .expect("mid node");
+    let ux = anm::fe::dof::index(node, 0);
+    let speed = (s1.full[ux] - s0.full[ux]) / (s1.t - s0.t);
+    let slip_max = s1
+        .friction
+        .iter()
+        .map(|f| f.slip.norm())
+        .fold(0.0, f64::max);
+    let pulled: f64 = s1.friction.iter().map(|f| f.force[0]).sum();
+    println!(
+        "creeping plate: speed {speed:.6e} m/s vs closed form {creep:.6e} (rel. {:.1e}); largest nodal slip {slip_max:.6e} m/s (omega Vc = {:.1e}); Σ R_T,x = {pulled:.6} N vs -T = {}",
+        (speed - creep).abs() / creep,
+        law.omega * law.vc,
+        -pull
+    );
+    assert!((speed - creep).abs() <= 5e-3 * creep, "{speed} vs {creep}");
+    assert!((pulled + pull).abs() <= 1e-6 * pull, "Σ R_T,x = {pulled}");
+    assert!(slip_max < 2.0 * law.omega * law.vc, "sticks: {slip_max}");
+}
+
+#[test]
+fn a_pull_above_what_friction_holds_stops_with_time_and_node() {
+    // T = 50 N > f N = 40 N: no quasi-static creep exists once loaded; the
+    // run stops with the time, the node and what may be wrong, no output.
+    let mut sc = scene("creeping-plate");
+    for l in &mut sc.loads {
+        if let anm::scene::shell::Load::Line { force, .. } = l {
+            *force *= 2.5;
+        }
+    }
+    sc.solver.max_steps = 300;
+    let e = shell_time::run(&sc, None).expect_err("no creep above f N");
+    let msg = e.to_string();
+    println!("{msg}");
+    assert_eq!(e.kind(), "time_steps", "{msg}");
+    assert!(msg.starts_with("t = ") && msg.contains("node "), "{msg}");
+}
