@@ -747,7 +747,7 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
                         for w in &sc.warnings {
                             eprintln!("warning: {w}");
                         }
-                        let r = anm::run::shell_time::run(&sc, Some(&out))
+                        let r = anm::run::shell_time::run_with(&sc, Some(&out), !quiet)
                             .with_context(|| format!("running {}", scene.display()))?;
                         println!(
                             "{}: stop = {} at t = {:.6} s; {} steps, {} factorizations, {} corrections, {:.3} s; {} friction nodes; outputs in {}",

@@ -6,12 +6,17 @@
 //!   max_slip (largest |v_s|);
 //! - friction.csv: per friction node at t_end (or the stop): gap, R_N,
 //!   R_T, v_s, |v_s| and `slip` (|v_s| > 10 omega Vc) or `stick`;
-//! - summary.json: counters, the stop and the last row.
+//! - summary.json: counters, the stop and the last row;
+//! - friction.vtu (ParaView): the last state's mid-surface with the
+//!   displacement, R_N, R_T, v_s, |v_s| and stick (1) / slip (0) per node;
+//! - friction.svg: rn_total and ft_x, ft_y, ft_z, and max_slip against t.
 
 use super::build::build_model;
 use super::probe::{self, State};
 use crate::contact::Motion;
 use crate::error::{Error, Result};
+use crate::output::plot::{Curve, Panel, draw};
+use crate::output::vtk::{PointData, write_vtu};
 use crate::scene::shell::ShellScene;
 use crate::series::ContinuationProblem;
 use crate::shell::friction_dae::{FrictionDae, TimeLaws};
@@ -91,9 +96,32 @@ pub fn config(scene: &ShellScene) -> TimeConfig {
 
 /// Solves a friction scene in time (no files).
 pub fn solve(scene: &ShellScene) -> Result<(TimeRun, FrictionDae)> {
+    solve_with(scene, false)
+}
+
+fn solve_with(scene: &ShellScene, progress: bool) -> Result<(TimeRun, FrictionDae)> {
     let mut dae = problem(scene)?;
-    let run = time_path::run(&mut dae, &config(scene))?;
-    Ok((run, dae))
+    let cfg = config(scene);
+    let bar = progress.then(|| {
+        let b = indicatif::ProgressBar::new(1000);
+        b.set_style(
+            indicatif::ProgressStyle::with_template("{bar:40} {percent:>3}% {msg}")
+                .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+        );
+        b
+    });
+    let t_end = cfg.t_end;
+    let mut show = |t: f64, steps: usize| {
+        if let Some(b) = &bar {
+            b.set_position((1000.0 * t / t_end) as u64);
+            b.set_message(format!("t = {t:.4e} s, {steps} steps"));
+        }
+    };
+    let run = time_path::run(&mut dae, &cfg, &mut show);
+    if let Some(b) = &bar {
+        b.finish_and_clear();
+    }
+    Ok((run?, dae))
 }
 
 /// Columns of history.csv after t and lambda: the probes, then the
@@ -132,8 +160,13 @@ fn write_err(file: &Path) -> impl Fn(String) -> Error + '_ {
 
 /// Runs a friction scene in time; writes its files into `out_dir`.
 pub fn run(scene: &ShellScene, out_dir: Option<&Path>) -> Result<TimeReport> {
+    run_with(scene, out_dir, false)
+}
+
+/// [`run`] with a progress bar on stderr.
+pub fn run_with(scene: &ShellScene, out_dir: Option<&Path>, progress: bool) -> Result<TimeReport> {
     let start = Instant::now();
-    let (run, dae) = solve(scene)?;
+    let (run, dae) = solve_with(scene, progress)?;
     let wall_s = start.elapsed().as_secs_f64();
     let head = header(scene);
     let rows: Vec<Vec<f64>> = run
@@ -225,10 +258,89 @@ pub fn run(scene: &ShellScene, out_dir: Option<&Path>) -> Result<TimeReport> {
                 .map_err(|e| write_err(&file)(e.to_string()))?;
         }
         w.flush().map_err(|e| write_err(&file)(e.to_string()))?;
+        write_fields(&dir.join("friction.vtu"), scene, &dae, last)?;
+        plot(&dir.join("friction.svg"), &head, &rows)?;
         let file = dir.join("summary.json");
         let text =
             serde_json::to_string_pretty(&report).map_err(|e| write_err(&file)(e.to_string()))?;
         std::fs::write(&file, text).map_err(|source| Error::Io { file, source })?;
     }
     Ok(report)
+}
+
+/// The last state as a VTK surface with the friction fields per node.
+fn write_fields(path: &Path, scene: &ShellScene, dae: &FrictionDae, s: &TimeSample) -> Result<()> {
+    let n = dae.model.n_nodes();
+    let v3 = |node: usize| {
+        let i = crate::fe::dof::index(node, 0);
+        nalgebra::Vector3::new(s.full[i], s.full[i + 1], s.full[i + 2])
+    };
+    let displacement: Vec<_> = (0..n).map(v3).collect();
+    let x: Vec<_> = (0..n).map(|i| dae.model.x0[i] + displacement[i]).collect();
+    let mut rn = vec![0.0; n];
+    let mut force = vec![nalgebra::Vector3::zeros(); n];
+    let mut slip = vec![nalgebra::Vector3::zeros(); n];
+    let mut stick = vec![0.0; n];
+    let law = dae.laws.law;
+    for f in &s.friction {
+        rn[f.node] += f.rn;
+        force[f.node] += f.force;
+        slip[f.node] = f.slip;
+        stick[f.node] = if f.slip.norm() > 10.0 * law.omega * law.vc {
+            0.0
+        } else {
+            1.0
+        };
+    }
+    let speed = slip.iter().map(|v| v.norm()).collect();
+    write_vtu(
+        path,
+        &x,
+        &scene.mesh.quads,
+        &[
+            PointData::Vector("displacement", displacement),
+            PointData::Scalar("contact_reaction", rn),
+            PointData::Vector("friction_force", force),
+            PointData::Vector("slip_velocity", slip),
+            PointData::Scalar("slip_speed", speed),
+            PointData::Scalar("stick", stick),
+        ],
+    )
+}
+
+/// The friction totals and the largest slip speed against t.
+fn plot(path: &Path, head: &[String], rows: &[Vec<f64>]) -> Result<()> {
+    let col = |name: &str| {
+        head.iter()
+            .position(|h| h == name)
+            .expect("a history column")
+    };
+    let curve = |name: &'static str| Curve {
+        label: name,
+        points: rows.iter().map(|r| (r[0], r[col(name)])).collect(),
+    };
+    draw(
+        path,
+        &[
+            Panel {
+                title: "normal and friction forces on the shell",
+                x_label: "t (s)",
+                y_label: "force (N)",
+                curves: vec![
+                    curve("rn_total"),
+                    curve("ft_x"),
+                    curve("ft_y"),
+                    curve("ft_z"),
+                ],
+                log: (false, false),
+            },
+            Panel {
+                title: "largest slip speed",
+                x_label: "t (s)",
+                y_label: "|v_s| (m/s)",
+                curves: vec![curve("max_slip")],
+                log: (false, false),
+            },
+        ],
+    )
 }

@@ -92,8 +92,13 @@ pub struct TimeRun {
     pub skipped: Vec<usize>,
 }
 
-/// Integrates from the consistent state at t = 0 (U = 0, at rest) to t_end.
-pub fn run(dae: &mut FrictionDae, cfg: &TimeConfig) -> Result<TimeRun> {
+/// Integrates from the consistent state at t = 0 (U = 0, at rest) to t_end;
+/// `progress(t, steps)` after every step.
+pub fn run(
+    dae: &mut FrictionDae,
+    cfg: &TimeConfig,
+    progress: &mut dyn FnMut(f64, usize),
+) -> Result<TimeRun> {
     let n_pairs = dae.model.pairs.len();
     let mut s = TimeState {
         t: 0.0,
@@ -181,6 +186,7 @@ pub fn run(dae: &mut FrictionDae, cfg: &TimeConfig) -> Result<TimeRun> {
             s.t = horizon;
         }
         stats.steps += 1;
+        progress(s.t, stats.steps);
         if !matches!(stop, TimeStop::End) {
             break;
         }
