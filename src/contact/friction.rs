@@ -223,9 +223,23 @@ pub fn record_slip<'a>(
     x: [Var<'a>; 3],
     xdot: [Var<'a>; 3],
 ) -> [Var<'a>; 3] {
+    let (n, h) = record_gap(b, obstacle, x);
+    let w = record_surface_velocity(b, obstacle, motion, x, n, h);
+    let r: [Var<'a>; 3] = std::array::from_fn(|i| xdot[i] - w[i]);
+    let nr = n[0] * r[0] + n[1] * r[1] + n[2] * r[2];
+    std::array::from_fn(|i| r[i] - nr * n[i])
+}
+
+/// Records the outward normal n and the gap h of a point x against
+/// `obstacle` (obstacle::Obstacle::gap): a plane's fixed normal, or for a
+/// cylinder y = P (x − c), d = |y|, n = y / d, h = d − r.
+pub fn record_gap<'a>(
+    b: &'a TapeBuilder,
+    obstacle: &Obstacle,
+    x: [Var<'a>; 3],
+) -> ([Var<'a>; 3], Var<'a>) {
     let dot = |a: [Var<'a>; 3], c: &Vec3| a[0] * c[0] + a[1] * c[1] + a[2] * c[2];
-    // Normal n and gap h.
-    let (n, h): ([Var<'a>; 3], Var<'a>) = match obstacle {
+    match obstacle {
         Obstacle::Plane { point, normal } => {
             let h = dot(x, normal) - point.dot(normal);
             (std::array::from_fn(|i| b.constant(normal[i])), h)
@@ -235,16 +249,27 @@ pub fn record_slip<'a>(
             axis,
             radius,
         } => {
-            // y = P (x − c), d = |y|, n = y / d, h = d − r.
             let xc: [Var<'a>; 3] = std::array::from_fn(|i| x[i] - centre[i]);
             let along = dot(xc, axis);
             let y: [Var<'a>; 3] = std::array::from_fn(|i| xc[i] - along * axis[i]);
             let d = (y[0] * y[0] + y[1] * y[1] + y[2] * y[2]).sqrt();
             (y.map(|yi| yi / d), d - *radius)
         }
-    };
+    }
+}
+
+/// Records the surface velocity w(p) of `obstacle` moving by `motion` at
+/// the contact point p = x − h n of a point x (Motion::surface_velocity).
+pub fn record_surface_velocity<'a>(
+    b: &'a TapeBuilder,
+    obstacle: &Obstacle,
+    motion: &Motion,
+    x: [Var<'a>; 3],
+    n: [Var<'a>; 3],
+    h: Var<'a>,
+) -> [Var<'a>; 3] {
     let p: [Var<'a>; 3] = std::array::from_fn(|i| x[i] - h * n[i]);
-    let w: [Var<'a>; 3] = match (motion, obstacle) {
+    match (motion, obstacle) {
         (Motion::Rotate { omega }, Obstacle::Cylinder { centre, axis, .. }) => {
             let q: [Var<'a>; 3] = std::array::from_fn(|i| p[i] - centre[i]);
             cross_const(axis, q, *omega)
@@ -257,10 +282,7 @@ pub fn record_slip<'a>(
             let v = motion.velocity();
             std::array::from_fn(|i| b.constant(v[i]))
         }
-    };
-    let r: [Var<'a>; 3] = std::array::from_fn(|i| xdot[i] - w[i]);
-    let nr = n[0] * r[0] + n[1] * r[1] + n[2] * r[2];
-    std::array::from_fn(|i| r[i] - nr * n[i])
+    }
 }
 
 /// s (a × q) for a constant vector a.

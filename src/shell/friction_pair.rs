@@ -19,7 +19,7 @@
 //! R_N (1).
 
 use crate::contact::normal::NormalLaw;
-use crate::contact::{FrictionLaw, Motion, Obstacle};
+use crate::contact::{FrictionLaw, Motion, Obstacle, friction};
 use crate::series::{Tape, TapeBuilder, Var};
 use nalgebra::Vector3;
 
@@ -83,10 +83,6 @@ impl FrictionPair {
     }
 }
 
-fn dot<'a>(a: [Var<'a>; 3], c: &Vector3<f64>) -> Var<'a> {
-    a[0] * c[0] + a[1] * c[1] + a[2] * c[2]
-}
-
 fn cross<'a>(a: [Var<'a>; 3], c: [Var<'a>; 3]) -> [Var<'a>; 3] {
     [
         a[1] * c[2] - a[2] * c[1],
@@ -119,30 +115,13 @@ fn record<'a>(
     m: Var<'a>,
 ) -> Vec<Var<'a>> {
     let konst = |v: Vector3<f64>| -> [Var<'a>; 3] { std::array::from_fn(|i| b.constant(v[i])) };
-    let (n, h, t1, t2) = match obstacle {
-        Obstacle::Plane { point, normal } => {
+    let (n, h) = friction::record_gap(b, obstacle, x);
+    let (t1, t2) = match obstacle {
+        Obstacle::Plane { normal, .. } => {
             let t1 = plane_t1(normal);
-            let t2 = normal.cross(&t1);
-            (
-                konst(*normal),
-                dot(x, normal) - point.dot(normal),
-                konst(t1),
-                konst(t2),
-            )
+            (konst(t1), konst(normal.cross(&t1)))
         }
-        Obstacle::Cylinder {
-            centre,
-            axis,
-            radius,
-        } => {
-            let xc: [Var<'a>; 3] = std::array::from_fn(|i| x[i] - centre[i]);
-            let along = dot(xc, axis);
-            let y: [Var<'a>; 3] = std::array::from_fn(|i| xc[i] - along * axis[i]);
-            let d = (y[0] * y[0] + y[1] * y[1] + y[2] * y[2]).sqrt();
-            let n = y.map(|yi| yi / d);
-            let e = konst(*axis);
-            (n, d - *radius, e, cross(n, e))
-        }
+        Obstacle::Cylinder { axis, .. } => (konst(*axis), cross(n, konst(*axis))),
     };
     // Eq. (3): R = 2 eta (delta − h) / (h + s) for h >= 0, (K/2)(s − h)
     // for h < 0, s = sqrt(h² + 4 eta (delta − h) / K).
@@ -154,18 +133,7 @@ fn record<'a>(
         (s - h) * (0.5 * k)
     };
     // Surface velocity of the obstacle at p = x − h n (full motion), projected.
-    let p: [Var<'a>; 3] = std::array::from_fn(|i| x[i] - h * n[i]);
-    let w_obs: [Var<'a>; 3] = match (motion, obstacle) {
-        (Motion::Rotate { omega }, Obstacle::Cylinder { centre, axis, .. }) => {
-            let q: [Var<'a>; 3] = std::array::from_fn(|i| p[i] - centre[i]);
-            cross(konst(*axis * *omega), q)
-        }
-        (Motion::Rotate { omega }, Obstacle::Plane { point, normal }) => {
-            let q: [Var<'a>; 3] = std::array::from_fn(|i| p[i] - point[i]);
-            cross(konst(*normal * *omega), q)
-        }
-        _ => konst(motion.velocity()),
-    };
+    let w_obs = friction::record_surface_velocity(b, obstacle, motion, x, n, h);
     let nw = n[0] * w_obs[0] + n[1] * w_obs[1] + n[2] * w_obs[2];
     let slip: [Var<'a>; 3] =
         std::array::from_fn(|i| t1[i] * w[0] + t2[i] * w[1] - (w_obs[i] - nw * n[i]) * m);
