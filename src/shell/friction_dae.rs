@@ -223,6 +223,11 @@ impl FrictionDae {
                 }
             }
         }
+        let hint = if self.laws.law.zeta.is_none() {
+            "; without friction.zeta a node with R_N = 0 has no friction capacity, so its tangential velocity is undetermined: set friction.zeta > 0"
+        } else {
+            ""
+        };
         let f = self
             .solver
             .factorize(&a)
@@ -230,7 +235,7 @@ impl FrictionDae {
                 step: 0,
                 param: "t",
                 at: s.t,
-                detail: format!("tangent of the shell with friction: {e}"),
+                detail: format!("tangent of the shell with friction: {e}{hint}"),
             })?;
         self.factorizations += 1;
         self.factor = Some(f);

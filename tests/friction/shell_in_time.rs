@@ -109,3 +109,19 @@ fn a_pull_above_what_friction_holds_stops_with_time_and_node() {
     assert_eq!(e.kind(), "time_steps", "{msg}");
     assert!(msg.starts_with("t = ") && msg.contains("node "), "{msg}");
 }
+
+#[test]
+fn without_zeta_the_free_nodes_are_diagnosed() {
+    // Eq. (5) with R_N as is: a node off the obstacle has no friction
+    // capacity, its velocity is undetermined; the error says what to set.
+    let mut sc = scene("creeping-plate");
+    sc.friction.as_mut().expect("friction").law.zeta = None;
+    let e = shell_time::run(&sc, None).expect_err("singular without zeta");
+    let msg = e.to_string();
+    println!("{msg}");
+    assert_eq!(e.kind(), "singular_matrix", "{msg}");
+    assert!(
+        msg.contains("t = ") && msg.contains("friction.zeta"),
+        "{msg}"
+    );
+}
