@@ -249,13 +249,13 @@ impl FrictionDae {
         let [m0, _] = self.motion_factor(s.t);
         let mut r = self.model.residual(&s.u, lam0)?;
         let full = self.model.expand(&s.u, lam0);
+        let xs: Vec<Vector3<f64>> = self
+            .pairs
+            .iter()
+            .map(|fp| self.position(&full, fp.node))
+            .collect();
         for (i, fp) in self.pairs.iter_mut().enumerate() {
-            let x = self.model.x0[fp.node]
-                + Vector3::new(
-                    full[dof(fp.node, 0)],
-                    full[dof(fp.node, 1)],
-                    full[dof(fp.node, 2)],
-                );
+            let x = xs[i];
             let w = s.w[fp.pair];
             let out = fp.tape.eval(&[x[0], x[1], x[2], w[0], w[1], m0]);
             for c in 0..3 {
