@@ -27,6 +27,8 @@ pub mod laws;
 pub mod output;
 pub mod run;
 pub mod settings;
+#[cfg(feature = "reference")]
+pub mod shell_ida;
 
 pub use error::IdaError;
 #[cfg(feature = "reference")]

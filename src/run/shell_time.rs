@@ -91,6 +91,7 @@ pub fn config(scene: &ShellScene) -> TimeConfig {
         max_corrections: scene.solver.max_corrections,
         min_step: scene.solver.min_step * fr.t_end,
         outputs,
+        implicit: fr.implicit,
     }
 }
 

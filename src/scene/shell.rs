@@ -165,6 +165,7 @@ struct RawFriction {
     load_ramp: Option<[f64; 2]>,
     motion_ramp: Option<[f64; 2]>,
     output_step: Option<f64>,
+    time_step: Option<String>,
 }
 
 #[derive(Deserialize)]
@@ -259,6 +260,9 @@ pub struct FrictionSpec {
     pub motion: Ramp,
     /// Rows of history.csv every `output_step` seconds.
     pub output_step: f64,
+    /// `time_step = "implicit"` (RODAS4 steps, shell::implicit_step) or
+    /// `"explicit"` (the Taylor series in t).
+    pub implicit: bool,
 }
 
 /// What a probe measures.
@@ -1192,6 +1196,16 @@ fn friction(
             format!("{output_step} s gives more than 1e6 rows up to t_end = {t_end} s"),
         ));
     }
+    let implicit = match fr.time_step.as_deref() {
+        None | Some("implicit") => true,
+        Some("explicit") => false,
+        Some(other) => {
+            return Err(c.fail(
+                "friction.time_step",
+                format!("expected \"implicit\" or \"explicit\", got \"{other}\""),
+            ));
+        }
+    };
     if !(moving || loaded && load.varies()) {
         return Err(c.fail(
             "friction",
@@ -1210,6 +1224,7 @@ fn friction(
         load,
         motion,
         output_step,
+        implicit,
     })
 }
 

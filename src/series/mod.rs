@@ -12,6 +12,7 @@ pub mod geometric;
 pub mod newton;
 pub mod pade;
 pub mod path;
+pub mod rodas;
 pub mod stats;
 pub mod stop;
 pub mod tape;

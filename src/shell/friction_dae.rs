@@ -27,6 +27,7 @@
 //! the frame rows and S the node's translation dofs. The kinematic rows are
 //! scaled by a typical diagonal entry of K.
 
+use super::chart::{Chart, ChartValue};
 use super::friction_pair::{self, FrictionPair};
 use super::model::ShellModel;
 use super::ramp::Ramp;
@@ -75,6 +76,14 @@ pub struct FrictionDae {
     /// Free translation dofs of each friction node.
     node_dofs: Vec<[usize; 3]>,
     rl: Vec<f64>,
+    /// The equilibrium rows of the augmented matrix at the step start.
+    equilibrium_rows: Vec<(usize, usize, f64)>,
+    /// ∂E/∂t at the step start (the ramps' rates), free dofs.
+    e_t: Vec<f64>,
+    /// Tangential coordinates of each friction node (the implicit step)
+    /// and their values at the step start.
+    charts: Vec<Chart>,
+    chart_start: Vec<ChartValue>,
     factor: Option<Factorization>,
     row_scale: f64,
     /// Contact nodes left without friction (a fixed translation).
@@ -94,6 +103,10 @@ impl FrictionDae {
             pairs: vec![],
             node_dofs: vec![],
             rl: vec![],
+            equilibrium_rows: vec![],
+            e_t: vec![],
+            charts: vec![],
+            chart_start: vec![],
             factor: None,
             row_scale: 1.0,
             skipped: vec![],
@@ -128,14 +141,23 @@ impl FrictionDae {
     /// the active pairs, the augmented matrix and its factorization. Errors
     /// name the node of a problem.
     pub fn linearize(&mut self, s: &TimeState) -> Result<()> {
-        let [lam0, _] = self.lambda(s.t);
-        let [m0, _] = self.motion_factor(s.t);
+        self.prepare(s)?;
+        self.factor_rows(None, s.t)
+    }
+
+    /// The linearization of [`FrictionDae::linearize`] without its
+    /// factorization (the implicit step factorizes its own matrix).
+    pub fn prepare(&mut self, s: &TimeState) -> Result<()> {
+        let [lam0, lam1] = self.lambda(s.t);
+        let [m0, m1] = self.motion_factor(s.t);
         let (k, rl) = self.model.tangent(&s.u, lam0)?;
         self.rl = rl;
         let full = self.model.expand(&s.u, lam0);
         self.pairs.clear();
         self.node_dofs.clear();
         self.skipped.clear();
+        self.charts.clear();
+        self.chart_start.clear();
         let mut seen = std::collections::HashMap::new();
         for &ip in self.model.active_pairs() {
             let pair = &self.model.pairs[ip];
@@ -181,45 +203,89 @@ impl FrictionDae {
             );
             let w = s.w[ip];
             fp.tape.eval(&[x[0], x[1], x[2], w[0], w[1], m0]);
+            self.charts
+                .push(Chart::new(ob, &x).ok_or_else(|| Error::NonFinite {
+                    step: 0,
+                    param: "t",
+                    at: s.t,
+                    what: format!("node {} lies on the obstacle axis", pair.node + 1),
+                })?);
+            self.chart_start
+                .push(self.charts[self.charts.len() - 1].eval(&x, w));
             self.node_dofs
                 .push(std::array::from_fn(|c| free[c].expect("checked free")));
             self.pairs.push(fp);
         }
         let n = self.model.ndof();
-        let np = self.pairs.len();
-        let mut a = SparseMatrix::new(n + 2 * np);
+        let mut rows = Vec::new();
         let mut diag = 0.0f64;
         for (r, c, v) in k.entries() {
-            a.add(r, c, v);
+            rows.push((r, c, v));
             if r == c {
                 diag = diag.max(v.abs());
             }
         }
         self.row_scale = if diag > 0.0 { diag } else { 1.0 };
+        // ∂E/∂t = R_λ λ'(t) − Σ ∂R_T/∂m m'(t) (the ramps are linear
+        // between their kinks, which no step crosses).
+        self.e_t = self.rl.iter().map(|r| r * lam1).collect();
         for (i, fp) in self.pairs.iter().enumerate() {
-            let jac = fp
-                .tape
-                .jacobian(&[0, 1, 2, friction_pair::W, friction_pair::W + 1]);
+            let jac = fp.tape.jacobian(&[
+                0,
+                1,
+                2,
+                friction_pair::W,
+                friction_pair::W + 1,
+                friction_pair::M,
+            ]);
             let dofs = self.node_dofs[i];
             for r in 0..3 {
                 for c in 0..3 {
-                    a.add(dofs[r], dofs[c], -jac[friction_pair::FORCE + r][c]);
+                    rows.push((dofs[r], dofs[c], -jac[friction_pair::FORCE + r][c]));
                 }
                 for c in 0..2 {
-                    a.add(
+                    rows.push((
                         dofs[r],
                         n + 2 * i + c,
                         -jac[friction_pair::FORCE + r][3 + c],
-                    );
+                    ));
                 }
+                self.e_t[dofs[r]] -= jac[friction_pair::FORCE + r][5] * m1;
             }
-            for (row, slot) in [friction_pair::T1, friction_pair::T2]
-                .into_iter()
-                .enumerate()
-            {
-                let t = fp.out3(slot, 0);
+        }
+        self.equilibrium_rows = rows;
+        Ok(())
+    }
+
+    /// Factorizes the augmented matrix: the equilibrium rows of the last
+    /// linearization and the kinematic rows, those of the series
+    /// (`hg` = None: row_scale T_0 S, 0) or of the implicit step (`hg` =
+    /// h γ: row_scale [(dC/dx − h γ ∂(D w)/∂x) S, −h γ D], module doc of
+    /// [`super::implicit_step`]).
+    fn factor_rows(&mut self, hg: Option<f64>, t: f64) -> Result<()> {
+        let n = self.model.ndof();
+        let np = self.pairs.len();
+        let mut a = SparseMatrix::new(n + 2 * np);
+        for &(r, c, v) in &self.equilibrium_rows {
+            a.add(r, c, v);
+        }
+        for (i, fp) in self.pairs.iter().enumerate() {
+            let dofs = self.node_dofs[i];
+            for row in 0..2 {
+                let coef = match hg {
+                    None => fp.out3([friction_pair::T1, friction_pair::T2][row], 0),
+                    Some(hg) => {
+                        let v = &self.chart_start[i];
+                        a.add(
+                            n + 2 * i + row,
+                            n + 2 * i + row,
+                            -self.row_scale * hg * v.d[row],
+                        );
+                        v.dc[row] - v.ddw[row] * hg
+                    }
+                };
                 for c in 0..3 {
-                    a.add(n + 2 * i + row, dofs[c], self.row_scale * t[c]);
+                    a.add(n + 2 * i + row, dofs[c], self.row_scale * coef[c]);
                 }
             }
         }
@@ -234,12 +300,18 @@ impl FrictionDae {
             .map_err(|e| Error::SingularMatrix {
                 step: 0,
                 param: "t",
-                at: s.t,
+                at: t,
                 detail: format!("tangent of the shell with friction: {e}{hint}"),
             })?;
         self.factorizations += 1;
         self.factor = Some(f);
         Ok(())
+    }
+
+    /// Refactorizes the last linearization for an implicit step of
+    /// M/(h γ) − J with `hg` = h γ.
+    pub fn factor_implicit(&mut self, hg: f64, t: f64) -> Result<()> {
+        self.factor_rows(Some(hg), t)
     }
 
     /// Equilibrium residual E(U, w, t) on the free dofs at the state (the
@@ -301,7 +373,59 @@ impl FrictionDae {
         out
     }
 
-    fn solve(&self, rhs: &[f64], t: f64) -> Result<Vec<f64>> {
+    /// Free dofs of friction pair i's translations.
+    pub fn pair_dofs(&self, i: usize) -> [usize; 3] {
+        self.node_dofs[i]
+    }
+
+    /// The chart of friction pair i and its value at the step start.
+    pub fn chart(&self, i: usize) -> (&Chart, &ChartValue) {
+        (&self.charts[i], &self.chart_start[i])
+    }
+
+    /// ∂E/∂(U, w) at the last [`FrictionDae::prepare`] (columns n + 2 i + a
+    /// for w of friction pair i).
+    pub fn equilibrium_rows(&self) -> &[(usize, usize, f64)] {
+        &self.equilibrium_rows
+    }
+
+    /// The frame t_a of friction pair i at the state of the last tape
+    /// evaluation, and ∂t_a/∂x (row k, column c: ∂t_a,k/∂x_c).
+    pub fn frame(&self, i: usize) -> ([Vector3<f64>; 2], [[[f64; 3]; 3]; 2]) {
+        let fp = &self.pairs[i];
+        let jac = fp.tape.jacobian(&[0, 1, 2]);
+        let t = [fp.out3(friction_pair::T1, 0), fp.out3(friction_pair::T2, 0)];
+        let dt = [friction_pair::T1, friction_pair::T2]
+            .map(|slot| std::array::from_fn(|k| std::array::from_fn(|c| jac[slot + k][c])));
+        (t, dt)
+    }
+
+    /// Scale of the kinematic rows of the augmented matrix.
+    pub fn row_scale(&self) -> f64 {
+        self.row_scale
+    }
+
+    /// ∂E/∂t at the step start.
+    pub fn e_t(&self) -> &[f64] {
+        &self.e_t
+    }
+
+    /// Positions of the friction pairs' nodes for the free dofs u at time t.
+    pub fn pair_positions(&self, u: &[f64], t: f64) -> Vec<Vector3<f64>> {
+        let full = self.model.expand(u, self.laws.load.value(t));
+        self.pairs
+            .iter()
+            .map(|fp| self.position(&full, fp.node))
+            .collect()
+    }
+
+    /// The w of the step's pairs, flat (2 i + a).
+    pub fn gather_w(&self, w: &[[f64; 2]]) -> Vec<f64> {
+        self.pairs.iter().flat_map(|fp| w[fp.pair]).collect()
+    }
+
+    /// Solves with the last factorization.
+    pub fn solve(&self, rhs: &[f64], t: f64) -> Result<Vec<f64>> {
         let f = self.factor.as_ref().expect("linearize before solving");
         let x = f.solve(rhs);
         if x.iter().all(|v| v.is_finite()) {

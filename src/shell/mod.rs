@@ -3,9 +3,11 @@
 //! Venant–Kirchhoff law, the 4-node element, its internal force along an ANM
 //! series, and the assembled model that the ANM engine continues.
 
+pub mod chart;
 pub mod element;
 pub mod friction_dae;
 pub mod friction_pair;
+pub mod implicit_step;
 pub mod kinematics;
 pub mod material;
 pub mod model;

@@ -35,6 +35,8 @@ pub struct TimeConfig {
     pub min_step: f64,
     /// Output times (increasing, within (0, t_end]).
     pub outputs: Vec<f64>,
+    /// Implicit steps ([`super::implicit_step`]) instead of the series.
+    pub implicit: bool,
 }
 
 /// The friction state of one node at an output time.
@@ -79,6 +81,8 @@ pub enum TimeStop {
 #[derive(Clone, Debug, Default)]
 pub struct TimeStats {
     pub steps: usize,
+    /// Implicit steps whose error test failed (retried shorter).
+    pub rejected: usize,
     pub factorizations: usize,
     pub corrections: usize,
     pub max_residual: f64,
@@ -117,7 +121,10 @@ pub fn run(
     let mut samples = vec![];
     let mut next_out = 0;
     consistent(dae, &mut s, cfg, &mut stats)?;
-    samples.push(sample(dae, &s, None, 0.0)?);
+    samples.push(sample(dae, &s, 0.0)?);
+    if cfg.implicit {
+        return run_implicit(dae, cfg, progress, s, samples, stats, &kinks);
+    }
     let mut stop = TimeStop::End;
     while s.t < cfg.t_end * (1.0 - 1e-14) {
         if stats.steps > 0 {
@@ -178,7 +185,7 @@ pub fn run(
         while next_out < cfg.outputs.len() && cfg.outputs[next_out] <= t1 * (1.0 + 1e-14) {
             let to = cfg.outputs[next_out];
             let st = evaluate(dae, &series, &s, to - s.t);
-            samples.push(sample(dae, &st, Some((&series, to - s.t)), to)?);
+            samples.push(sample(dae, &st, to)?);
             next_out += 1;
         }
         s = evaluate(dae, &series, &s, a);
@@ -276,6 +283,163 @@ fn largest_node(dae: &FrictionDae, term: &[f64]) -> usize {
             (0, 0.0),
             |b, (i, v)| if v.abs() > b.1 { (i, v.abs()) } else { b },
         );
+    node_of_dof(dae, k)
+}
+
+/// Implicit steps ([`super::implicit_step`]) from the consistent state s
+/// to t_end, ending at every output time and kink of the ramps. Per step:
+/// the linearization at its start, the factorization of M/(h γ) − J, the
+/// start settled onto the equilibrium with it ([`implicit_step::settle`]),
+/// the stages. A trial is accepted where the error estimate of U passes
+/// and the equilibrium residual at its end is within `residual_tol`;
+/// h ← h · clamp(0.9 err^(−1/4), 0.2, 5).
+fn run_implicit(
+    dae: &mut FrictionDae,
+    cfg: &TimeConfig,
+    progress: &mut dyn FnMut(f64, usize),
+    mut s: TimeState,
+    mut samples: Vec<TimeSample>,
+    mut stats: TimeStats,
+    kinks: &[f64],
+) -> Result<TimeRun> {
+    use super::implicit_step::{self, Trial};
+    use crate::series::rodas::{ERROR_ORDER, RODAS4};
+    let mut next_out = 0;
+    let mut h = cfg.t_end * 1e-4;
+    // Error test: |error of the translations| ≤ max(eps × the largest
+    // translation so far, 1e-13 solver.length_scale), the second term a
+    // few hundred round-offs of the node coordinates, which the residual's
+    // gaps and frames see.
+    let mut scale = 0.0f64;
+    let atol = 1e-13 * dae.model.length_scale;
+    let mut last_dof = 0;
+    let settle_tol = cfg.residual_tol * 1e-3;
+    let per_node = crate::fe::dof::PER_NODE;
+    let mut translation = vec![false; s.u.len()];
+    for (full, free) in dae.model.free.iter().enumerate() {
+        if let Some(k) = free {
+            translation[*k] = full % per_node < 3;
+        }
+    }
+    let size_of = |u: &[f64]| {
+        u.iter()
+            .zip(&translation)
+            .filter(|(_, t)| **t)
+            .fold(0.0f64, |m, (v, _)| m.max(v.abs()))
+    };
+    loop {
+        let at_output =
+            next_out < cfg.outputs.len() && s.t >= cfg.outputs[next_out] * (1.0 - 1e-14);
+        let done = s.t >= cfg.t_end * (1.0 - 1e-14);
+        if !done && stats.steps >= cfg.max_steps {
+            return Err(Error::TimeSteps {
+                param: "t",
+                at: s.t,
+                what: format!(
+                    "step budget solver.max_steps = {} spent before t_end = {:.6e} s ({} implicit steps rejected); node {} carries the largest error estimate: the quasi-static solution may cease to exist there (e.g. a pull above what friction can hold)",
+                    cfg.max_steps,
+                    cfg.t_end,
+                    stats.rejected,
+                    node_of_dof(dae, last_dof) + 1
+                ),
+            });
+        }
+        let target = kinks
+            .iter()
+            .copied()
+            .chain(cfg.outputs.get(next_out + usize::from(at_output)).copied())
+            .filter(|&k| k > s.t * (1.0 + 1e-14))
+            .fold(cfg.t_end, f64::min);
+        let mut length = h.min(target - s.t);
+        dae.prepare(&s)?;
+        dae.factor_implicit(length * RODAS4.gamma, s.t)?;
+        let rel = implicit_step::settle(dae, &mut s, settle_tol)?;
+        stats.max_residual = stats.max_residual.max(rel);
+        if at_output {
+            s.t = cfg.outputs[next_out];
+            samples.push(sample(dae, &s, s.t)?);
+            next_out += 1;
+        }
+        if done {
+            break;
+        }
+        let accepted: Trial = loop {
+            let attempt =
+                implicit_step::trial(dae, &s, length, cfg.eps, 1.0, &translation).map(|mut t| {
+                    let size = size_of(&s.u).max(size_of(&t.end.u)).max(scale);
+                    t.error *= cfg.eps / (cfg.eps * size).max(atol);
+                    t
+                });
+            // The end must also lie near the equilibrium (the algebraic
+            // part), which the error test on U does not see: in saturated
+            // slip the stages' w swing far from the linearization.
+            let end_residual = match &attempt {
+                Ok(t) if t.error.is_finite() && t.error <= 1.0 => {
+                    norm(&dae.residual(&t.end)?) / dae.force_scale().max(f64::MIN_POSITIVE)
+                }
+                _ => f64::NAN,
+            };
+            let (factor, diagnosis) = match attempt {
+                Ok(t) if end_residual <= cfg.residual_tol => break t,
+                Ok(t) if t.error.is_finite() && t.error <= 1.0 => {
+                    last_dof = t.worst_dof;
+                    (
+                        0.5,
+                        format!(
+                            "the equilibrium residual at the step end, {end_residual:.2e}, exceeds solver.residual_tol"
+                        ),
+                    )
+                }
+                Ok(t) if t.error.is_finite() => {
+                    last_dof = t.worst_dof;
+                    (
+                        (0.9 * t.error.powf(-1.0 / ERROR_ORDER)).max(0.2),
+                        "the error estimate exceeds eps".to_string(),
+                    )
+                }
+                Ok(_) => (0.25, "the error estimate is not finite".to_string()),
+                Err(e) => (0.25, e.to_string()),
+            };
+            stats.rejected += 1;
+            length *= factor;
+            if length < cfg.min_step {
+                return Err(Error::TimeSteps {
+                    param: "t",
+                    at: s.t,
+                    what: format!(
+                        "implicit step length collapsed to {length:.3e} s after {} steps: {diagnosis}; node {} carries the largest error estimate: the quasi-static solution may cease to exist here (e.g. a pull above what friction can hold)",
+                        stats.steps,
+                        node_of_dof(dae, last_dof) + 1
+                    ),
+                });
+            }
+            dae.factor_implicit(length * RODAS4.gamma, s.t)?;
+        };
+        let grow = if accepted.error > 0.0 {
+            (0.9 * accepted.error.powf(-1.0 / ERROR_ORDER)).clamp(0.2, 5.0)
+        } else {
+            5.0
+        };
+        h = length * grow;
+        s = accepted.end;
+        if (s.t - target).abs() <= 1e-12 * target.abs().max(1.0) {
+            s.t = target;
+        }
+        scale = scale.max(size_of(&s.u));
+        stats.steps += 1;
+        progress(s.t, stats.steps);
+    }
+    stats.factorizations = dae.factorizations;
+    Ok(TimeRun {
+        samples,
+        stop: TimeStop::End,
+        stats,
+        skipped: dae.skipped.clone(),
+    })
+}
+
+/// The node (0-based) of a free dof.
+fn node_of_dof(dae: &FrictionDae, k: usize) -> usize {
     dae.model
         .free
         .iter()
@@ -285,43 +449,31 @@ fn largest_node(dae: &FrictionDae, term: &[f64]) -> usize {
 
 /// The solution at time t: the full vector, and per friction node R_N,
 /// R_T and v_s evaluated from the laws directly (eq. 3 and
-/// contact::friction::FrictionLaw::nodal with ẋ from the series).
-fn sample(
-    dae: &FrictionDae,
-    s: &TimeState,
-    series: Option<(&StepSeries, f64)>,
-    t: f64,
-) -> Result<TimeSample> {
+/// contact::friction::FrictionLaw::nodal, with the tangential velocity
+/// t_1 w_1 + t_2 w_2 of the state).
+fn sample(dae: &FrictionDae, s: &TimeState, t: f64) -> Result<TimeSample> {
     let lambda = dae.laws.load.value(t);
     let full = dae.model.expand(&s.u, lambda);
     let m = dae.laws.motion.value(t);
-    // ẋ = Σ k U_k a^(k−1) (prescribed dofs: λ'(t) × their value).
-    let velocity = match series {
-        Some((ser, a)) => {
-            let n = s.u.len();
-            let mut v = vec![0.0; n];
-            for (k, uk) in ser.u.iter().enumerate().skip(1) {
-                let f = k as f64 * a.powi(k as i32 - 1);
-                for i in 0..n {
-                    v[i] += f * uk[i];
-                }
-            }
-            dae.model.expand(&v, dae.laws.load.rate(t))
-        }
-        None => vec![0.0; full.len()],
-    };
     let mut friction = vec![];
     for (ip, node) in dae.step_pairs() {
         let pair = &dae.model.pairs[ip];
         let ob = &dae.model.obstacles[pair.obstacle];
         let x = dae.model.x0[node] + v3(&full, node);
-        let xdot = v3(&velocity, node);
         let g = ob.gap(&x).ok_or_else(|| Error::NonFinite {
             step: 0,
             param: "t",
             at: t,
             what: format!("contact gap of node {} (on the obstacle axis)", node + 1),
         })?;
+        let (t1, t2) = match ob {
+            crate::contact::Obstacle::Plane { normal, .. } => {
+                let t1 = super::friction_pair::plane_t1(normal);
+                (t1, normal.cross(&t1))
+            }
+            crate::contact::Obstacle::Cylinder { axis, .. } => (*axis, g.n.cross(axis)),
+        };
+        let xdot = t1 * s.w[ip][0] + t2 * s.w[ip][1];
         let rn = pair.law.force(g.h);
         let motion = scaled(&dae.laws.motions[pair.obstacle], m);
         let nf = dae

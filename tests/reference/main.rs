@@ -5,3 +5,4 @@
 mod common;
 mod dolfinx_plate_cylinder;
 mod ida;
+mod shell_ida;
