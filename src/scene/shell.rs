@@ -165,7 +165,6 @@ struct RawFriction {
     load_ramp: Option<[f64; 2]>,
     motion_ramp: Option<[f64; 2]>,
     output_step: Option<f64>,
-    time_step: Option<String>,
 }
 
 #[derive(Deserialize)]
@@ -198,6 +197,7 @@ struct RawSolver {
     linear_solver: Option<String>,
     branch: Option<String>,
     branch_direction: Option<f64>,
+    time_step: Option<String>,
 }
 
 #[derive(Deserialize)]
@@ -260,8 +260,8 @@ pub struct FrictionSpec {
     pub motion: Ramp,
     /// Rows of history.csv every `output_step` seconds.
     pub output_step: f64,
-    /// `time_step = "implicit"` (RODAS4 steps, shell::implicit_step) or
-    /// `"explicit"` (the Taylor series in t).
+    /// `solver.time_step = "implicit"` (RODAS4 steps, shell::implicit_step)
+    /// or `"explicit"` (the Taylor series in t).
     pub implicit: bool,
 }
 
@@ -583,8 +583,23 @@ pub fn load(path: &Path) -> Result<ShellScene> {
     };
     let loaded = !loads.is_empty() || fixed.values().any(|v| *v != 0.0);
     let friction = match &raw.friction {
-        Some(fr) => Some(friction(&c, fr, &obstacles, contact.is_some(), loaded)?),
-        None => None,
+        Some(fr) => Some(friction(
+            &c,
+            fr,
+            raw.solver.time_step.as_deref(),
+            &obstacles,
+            contact.is_some(),
+            loaded,
+        )?),
+        None => {
+            if raw.solver.time_step.is_some() {
+                return Err(c.fail(
+                    "solver.time_step",
+                    "applies to scenes in time (with [friction]); remove it",
+                ));
+            }
+            None
+        }
     };
     let warnings = if friction.is_none() {
         motion_warnings(path, &obstacles)
@@ -1123,6 +1138,7 @@ fn obstacles(ctx: &Ctx, raw: &[RawObstacle]) -> Result<Vec<ObstacleSpec>> {
 fn friction(
     c: &Checker,
     fr: &RawFriction,
+    time_step: Option<&str>,
     obstacles: &[ObstacleSpec],
     contact: bool,
     loaded: bool,
@@ -1196,12 +1212,12 @@ fn friction(
             format!("{output_step} s gives more than 1e6 rows up to t_end = {t_end} s"),
         ));
     }
-    let implicit = match fr.time_step.as_deref() {
+    let implicit = match time_step {
         None | Some("implicit") => true,
         Some("explicit") => false,
         Some(other) => {
             return Err(c.fail(
-                "friction.time_step",
+                "solver.time_step",
                 format!("expected \"implicit\" or \"explicit\", got \"{other}\""),
             ));
         }

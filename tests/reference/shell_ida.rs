@@ -9,7 +9,7 @@ use anm::reference::shell_ida::{ShellIda, trajectory_difference};
 use anm::run::shell_time;
 use anm::scene::shell::load;
 
-fn coarse_capstan() -> anm::scene::shell::ShellScene {
+fn coarse_capstan(name: &str) -> anm::scene::shell::ShellScene {
     let text = std::fs::read_to_string("scenes/strip-capstan.toml").expect("scene");
     let text = text
         .replace("angle = [0.0, 180.0]", "angle = [0.0, 90.0]")
@@ -20,14 +20,14 @@ fn coarse_capstan() -> anm::scene::shell::ShellScene {
         );
     let dir = std::env::temp_dir().join(format!("anm-shell-ida-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("temp dir");
-    let path = dir.join("coarse-capstan.toml");
+    let path = dir.join(format!("{name}.toml"));
     std::fs::write(&path, text).expect("write scene");
     load(&path).expect("scene loads")
 }
 
 #[test]
 fn anm_implicit_steps_agree_with_ida_on_the_shell_residual() {
-    let mut sc = coarse_capstan();
+    let mut sc = coarse_capstan("agree");
     sc.solver.eps = 1e-10;
     let cfg = shell_time::config(&sc);
     let (run, _) = shell_time::solve(&sc).expect("ANM runs");
@@ -57,4 +57,68 @@ fn anm_implicit_steps_agree_with_ida_on_the_shell_residual() {
         reference.wall_s
     );
     assert!(diff <= 1e-6, "{diff}");
+}
+
+/// Work-precision on the coarse capstan (issue 10 item 6), printed: the
+/// ANM's implicit steps over eps and IDA over rtol, each against IDA at
+/// rtol 1e-12 (max relative difference of the translations over the output
+/// times), with steps and wall time (meaningful in a release build:
+/// `cargo test --release --features reference --test reference
+/// work_precision -- --nocapture`). Asserts only that every run reaches
+/// t_end and that the errors fall with the tolerance.
+#[test]
+fn work_precision_on_the_coarse_capstan() {
+    let sc = coarse_capstan("work-precision");
+    let cfg = shell_time::config(&sc);
+    let kinks: Vec<f64> = {
+        let fr = sc.friction.as_ref().expect("friction");
+        let mut k = fr.load.kinks();
+        k.extend(fr.motion.kinks());
+        k.retain(|&k| k > 0.0);
+        k
+    };
+    let ida_run = |rtol: f64| {
+        ShellIda::new(shell_time::problem(&sc).expect("problem"))
+            .expect("IDA set-up")
+            .solve(&cfg.outputs, &kinks, rtol, 10_000_000)
+            .expect("IDA runs")
+    };
+    let reference = ida_run(1e-12);
+    println!("| solver | tolerance | steps | wall (s) | error vs IDA 1e-12 |");
+    println!("|---|---|---|---|---|");
+    let mut last = f64::INFINITY;
+    for eps in [1e-6, 1e-8, 1e-10] {
+        let mut s = sc.clone();
+        s.solver.eps = eps;
+        let start = std::time::Instant::now();
+        let (run, _) = shell_time::solve(&s).expect("ANM runs");
+        let wall = start.elapsed().as_secs_f64();
+        let anm: Vec<(f64, Vec<f64>)> = run.samples.iter().map(|s| (s.t, s.full.clone())).collect();
+        let err = trajectory_difference(&anm[1..], &reference.samples);
+        println!(
+            "| ANM implicit | eps {eps:e} | {} | {wall:.3} | {err:.1e} |",
+            run.stats.steps
+        );
+        assert!(err < last.max(1e-9) * 1.5, "eps {eps}: {err}");
+        last = err;
+    }
+    for rtol in [1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11] {
+        let attempt = ShellIda::new(shell_time::problem(&sc).expect("problem"))
+            .expect("IDA set-up")
+            .solve(&cfg.outputs, &kinks, rtol, 10_000_000);
+        match attempt {
+            Ok(r) => {
+                let err = trajectory_difference(&r.samples, &reference.samples);
+                println!(
+                    "| IDA | rtol {rtol:e} | {} | {:.3} | {err:.1e} |",
+                    r.steps, r.wall_s
+                );
+            }
+            Err(e) => println!("| IDA | rtol {rtol:e} | – | – | fails: {e} |"),
+        }
+    }
+    println!(
+        "| IDA (reference) | rtol 1e-12 | {} | {:.3} | – |",
+        reference.steps, reference.wall_s
+    );
 }

@@ -229,3 +229,33 @@ fn in_time_a_translation_must_keep_the_surface_in_place() {
     );
     expect_invalid(&p, "friction.output_step", "> 0");
 }
+
+#[test]
+fn time_step_is_read_and_bad_values_are_named() {
+    // Default: implicit steps; "explicit" selects the series.
+    assert!(load(Path::new(BASE)).unwrap().friction.unwrap().implicit);
+    let p = scene(
+        "explicit.toml",
+        &[("[solver]\n", "[solver]\ntime_step = \"explicit\"\n")],
+    );
+    assert!(!load(&p).unwrap().friction.unwrap().implicit);
+    expect_invalid(
+        &scene(
+            "time-step-bad.toml",
+            &[("[solver]\n", "[solver]\ntime_step = \"rosenbrock\"\n")],
+        ),
+        "solver.time_step",
+        "\"implicit\" or \"explicit\"",
+    );
+    // A static scene (no [friction]) has no steps in time.
+    let text = std::fs::read_to_string("scenes/verification/sliding-plate.toml").unwrap();
+    let start = text.find("[friction]").unwrap();
+    let end = text[start..].find("\n\n").unwrap() + start;
+    let mut text = format!("{}{}", &text[..start], &text[end..]);
+    text = text.replacen("[solver]\n", "[solver]\ntime_step = \"implicit\"\n", 1);
+    let d = std::env::temp_dir().join("anm-shell-friction-input");
+    std::fs::create_dir_all(&d).unwrap();
+    let p = d.join("static-time-step.toml");
+    std::fs::write(&p, text).unwrap();
+    expect_invalid(&p, "solver.time_step", "[friction]");
+}
