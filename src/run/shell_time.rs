@@ -46,6 +46,11 @@ pub struct TimeReport {
     pub stop_node: Option<usize>,
     /// The columns of history.csv at its last row.
     pub end: BTreeMap<String, f64>,
+    /// history.csv's header and rows (not in summary.json).
+    #[serde(skip)]
+    pub header: Vec<String>,
+    #[serde(skip)]
+    pub history: Vec<Vec<f64>>,
 }
 
 /// The model and laws of a friction scene, ready to integrate.
@@ -206,6 +211,8 @@ pub fn run_with(scene: &ShellScene, out_dir: Option<&Path>, progress: bool) -> R
             .cloned()
             .zip(rows.last().cloned().unwrap_or_default())
             .collect(),
+        header: head.clone(),
+        history: rows.clone(),
     };
     if let Some(dir) = out_dir {
         std::fs::create_dir_all(dir).map_err(|source| Error::Io {

@@ -18,4 +18,5 @@ pub mod stiffness;
 pub mod stress;
 pub mod sweep;
 pub mod target;
+pub mod time_audit;
 pub mod timing;

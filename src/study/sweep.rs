@@ -537,10 +537,14 @@ pub fn open(spec: &Spec) -> Result<Box<dyn Sweep>> {
             };
             let text = scene::read(path)?;
             match scene::kind(path, &text)? {
-                Kind::Shell => Box::new(super::shell_audit::ShellAudit::new(
-                    scene::shell::load(path)?,
-                    &sweeps,
-                )?),
+                Kind::Shell => {
+                    let shell = scene::shell::load(path)?;
+                    if shell.friction.is_some() {
+                        Box::new(super::time_audit::TimeAudit::new(shell, &sweeps)?)
+                    } else {
+                        Box::new(super::shell_audit::ShellAudit::new(shell, &sweeps)?)
+                    }
+                }
                 kind => Box::new(super::audit::FrictionAudit::new(
                     scene::friction::load(path, &text, kind)?,
                     &sweeps,

@@ -225,3 +225,47 @@ fn capstan_tension_follows_euler_eytelwein() {
     println!("slowest slip at t_end: {slowest:.6} m/s (V = 0.1)");
     assert!(slowest > 0.99 * 0.1, "{slowest}");
 }
+
+/// Issue 10 items 3a and 5: the audit in time (`anm audit` on a friction
+/// scene) measures the regularization's share of the capstan's tension. ω
+/// enters through g = V/|V|_reg on f (q = 0), so between ω = 0.1 and
+/// ω = 1e-3 the held tension moves by 1 − exp(f θ (g(0.1) − g(1e-3))).
+#[test]
+fn the_audit_measures_omega_share_of_the_capstan_tension() {
+    use anm::study::audit::Sweeps;
+    use anm::study::time_audit::{jobs, rows, run_item};
+    let sc = capstan(90.0, 0.2);
+    let sweeps = Sweeps {
+        omega: vec![1e-1, 1e-3],
+        zeta: vec![],
+        eta: vec![],
+        penalty: vec![],
+    };
+    let items: Vec<_> = jobs(&sc, &sweeps)
+        .expect("valid sweep")
+        .iter()
+        .map(|(name, v, s)| run_item(name, *v, s))
+        .collect();
+    let rows = rows(&sc, &items);
+    let law = sc.friction.as_ref().expect("friction").law;
+    let g = |omega: f64| 0.1 / (0.01 + (omega * law.vc).powi(2)).sqrt();
+    let theta = std::f64::consts::FRAC_PI_2;
+    let predicted = 1.0 - (law.f * theta * (g(1e-1) - g(1e-3))).exp();
+    let measured = rows[0].key_deviation;
+    println!(
+        "omega share of the held tension: measured {measured:.4e}, law {predicted:.4e} ({} and {} steps)",
+        rows[0].steps, rows[1].steps
+    );
+    assert_eq!(rows[0].stop, "end");
+    assert!(
+        (measured - predicted).abs() <= 0.05 * predicted,
+        "{measured} vs {predicted}"
+    );
+    // Bad values are named before any run.
+    let bad = Sweeps {
+        omega: vec![-1.0],
+        ..sweeps
+    };
+    let e = jobs(&sc, &bad).expect_err("negative omega");
+    assert!(e.to_string().contains("--omega"), "{e}");
+}
