@@ -35,6 +35,11 @@ pub struct TimeReport {
     /// Contact nodes left without friction (a fixed translation), 1-based.
     pub nodes_without_friction: Vec<usize>,
     pub steps: usize,
+    /// `solver.time_step` and the steps taken by the implicit step.
+    pub time_step: String,
+    pub implicit_steps: usize,
+    /// Implicit trials rejected (error test or end residual).
+    pub rejected: usize,
     pub factorizations: usize,
     pub corrections: usize,
     pub max_residual: f64,
@@ -96,7 +101,7 @@ pub fn config(scene: &ShellScene) -> TimeConfig {
         max_corrections: scene.solver.max_corrections,
         min_step: scene.solver.min_step * fr.t_end,
         outputs,
-        implicit: fr.implicit,
+        stepping: fr.stepping,
     }
 }
 
@@ -199,6 +204,13 @@ pub fn run_with(scene: &ShellScene, out_dir: Option<&Path>, progress: bool) -> R
         friction_nodes: last.friction.len(),
         nodes_without_friction: run.skipped.iter().map(|n| n + 1).collect(),
         steps: run.stats.steps,
+        time_step: scene
+            .friction
+            .as_ref()
+            .map_or("explicit", |f| f.stepping.name())
+            .to_string(),
+        implicit_steps: run.stats.implicit,
+        rejected: run.stats.rejected,
         factorizations: run.stats.factorizations,
         corrections: run.stats.corrections,
         max_residual: run.stats.max_residual,

@@ -18,6 +18,7 @@ use crate::series::ContinuationConfig;
 use crate::series::newton::{Control, NewtonConfig};
 use crate::shell::Material;
 use crate::shell::ramp::Ramp;
+use crate::shell::time_path::Stepping;
 use serde::Deserialize;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -260,9 +261,9 @@ pub struct FrictionSpec {
     pub motion: Ramp,
     /// Rows of history.csv every `output_step` seconds.
     pub output_step: f64,
-    /// `solver.time_step = "implicit"` (RODAS4 steps, shell::implicit_step)
-    /// or `"explicit"` (the Taylor series in t).
-    pub implicit: bool,
+    /// `solver.time_step`: "implicit" (RODAS4 steps, shell::implicit_step),
+    /// "explicit" (the Taylor series in t) or "auto" (per step).
+    pub stepping: Stepping,
 }
 
 /// What a probe measures.
@@ -1212,13 +1213,16 @@ fn friction(
             format!("{output_step} s gives more than 1e6 rows up to t_end = {t_end} s"),
         ));
     }
-    let implicit = match time_step {
-        None | Some("implicit") => true,
-        Some("explicit") => false,
+    let stepping = match time_step {
+        None | Some("auto") => Stepping::Auto,
+        Some("implicit") => Stepping::Implicit,
+        Some("explicit") => Stepping::Explicit,
         Some(other) => {
             return Err(c.fail(
                 "solver.time_step",
-                format!("expected \"implicit\" or \"explicit\", got \"{other}\""),
+                format!(
+                    "expected \"auto\", \"implicit\" or \"explicit\" for a shell scene, got \"{other}\""
+                ),
             ));
         }
     };
@@ -1240,7 +1244,7 @@ fn friction(
         load,
         motion,
         output_step,
-        implicit,
+        stepping,
     })
 }
 

@@ -182,13 +182,24 @@ pub fn settle(dae: &mut FrictionDae, end: &mut TimeState, target: f64) -> Result
             *b = -e;
         }
         let d = dae.solve(&rhs, end.t)?;
-        let next = dae.moved(end, &d, 1.0);
-        let r_next = dae.residual(&next)?;
-        let rel_next = crate::linalg::norm(&r_next) / scale;
-        if !(rel_next < rel) {
+        // Backtracking: the law is a sigmoid of the slip, on which a full
+        // Newton step from a state near its bend overshoots.
+        let mut alpha = 1.0;
+        let mut accepted = None;
+        for _ in 0..8 {
+            let next = dae.moved(end, &d, alpha);
+            let r_next = dae.residual(&next)?;
+            let rel_next = crate::linalg::norm(&r_next) / scale;
+            if rel_next < rel {
+                accepted = Some((next, r_next, rel_next));
+                break;
+            }
+            alpha *= 0.5;
+        }
+        let Some((next, r_next, rel_next)) = accepted else {
             dae.residual(end)?;
             break;
-        }
+        };
         *end = next;
         r = r_next;
         rel = rel_next;

@@ -17,6 +17,7 @@ use crate::error::{Error, Result};
 use crate::fe::dof::index as dof;
 use crate::linalg::norm;
 use crate::series::ContinuationProblem;
+pub use crate::series::dae::Stepping;
 use crate::series::geometric;
 use crate::series::taylor;
 use nalgebra::Vector3;
@@ -35,8 +36,13 @@ pub struct TimeConfig {
     pub min_step: f64,
     /// Output times (increasing, within (0, t_end]).
     pub outputs: Vec<f64>,
-    /// Implicit steps ([`super::implicit_step`]) instead of the series.
-    pub implicit: bool,
+    /// How a step uses the series (`solver.time_step`): `Explicit`, the
+    /// series; `Implicit`, RODAS4 steps ([`super::implicit_step`]); `Auto`,
+    /// implicit steps, with the series taken wherever its step reaches at
+    /// least as far as the implicit one (tried every step while it wins,
+    /// then every 2, 4 … 16 steps). `Pade` is not used here (the scene
+    /// refuses it).
+    pub stepping: Stepping,
 }
 
 /// The friction state of one node at an output time.
@@ -83,6 +89,8 @@ pub struct TimeStats {
     pub steps: usize,
     /// Implicit steps whose error test failed (retried shorter).
     pub rejected: usize,
+    /// Steps taken by the implicit step (the rest by the series).
+    pub implicit: usize,
     pub factorizations: usize,
     pub corrections: usize,
     pub max_residual: f64,
@@ -117,12 +125,11 @@ pub fn run(
         k.sort_by(f64::total_cmp);
         k
     };
-    let scale = dae.model.length_scale;
     let mut samples = vec![];
     let mut next_out = 0;
     consistent(dae, &mut s, cfg, &mut stats)?;
     samples.push(sample(dae, &s, 0.0)?);
-    if cfg.implicit {
+    if cfg.stepping != Stepping::Explicit {
         return run_implicit(dae, cfg, progress, s, samples, stats, &kinks);
     }
     let mut stop = TimeStop::End;
@@ -144,30 +151,13 @@ pub fn run(
                 ),
             });
         }
-        let scaled = |k: usize| norm(&series.u[k]) / scale;
-        let (n1, nn) = (scaled(1), scaled(n_ord));
-        let horizon = kinks
-            .iter()
-            .copied()
-            .find(|&k| k > s.t * (1.0 + 1e-14))
-            .unwrap_or(cfg.t_end)
-            .min(cfg.t_end);
-        let mut a = if nn > 0.0 && n1 > 0.0 {
-            (cfg.eps * n1 / nn).powf(1.0 / (n_ord as f64 - 1.0))
-        } else if nn > 0.0 {
-            (cfg.eps / nn).powf(1.0 / n_ord as f64)
-        } else {
-            f64::INFINITY
-        };
-        let geo = geometric::detect(&series.u);
-        if let Some(g) = geo
-            && g.distance <= a
-        {
+        let horizon = next_kink(&kinks, s.t, cfg.t_end);
+        let (mut a, found) = series_length(dae, &series, cfg);
+        if let Some(t) = found {
             stop = TimeStop::Singularity {
-                t: s.t + g.distance,
+                t: s.t + t,
                 node: largest_node(dae, &series.u[n_ord]),
             };
-            a = g.distance;
         }
         a = a.min(horizon - s.t);
         if a < cfg.min_step && s.t + a < horizon * (1.0 - 1e-14) {
@@ -205,6 +195,37 @@ pub fn run(
         stats,
         skipped: dae.skipped.clone(),
     })
+}
+
+/// The first kink of the ramps after t, or t_end.
+fn next_kink(kinks: &[f64], t: f64, t_end: f64) -> f64 {
+    kinks
+        .iter()
+        .copied()
+        .find(|&k| k > t * (1.0 + 1e-14))
+        .unwrap_or(t_end)
+        .min(t_end)
+}
+
+/// The explicit step's length from the series: the ratio rule on the
+/// displacements over the length scale, shortened to a singular point of
+/// a geometric series (returned as its distance).
+fn series_length(dae: &FrictionDae, series: &StepSeries, cfg: &TimeConfig) -> (f64, Option<f64>) {
+    let n_ord = cfg.order;
+    let scale = dae.model.length_scale;
+    let scaled = |k: usize| norm(&series.u[k]) / scale;
+    let (n1, nn) = (scaled(1), scaled(n_ord));
+    let a = if nn > 0.0 && n1 > 0.0 {
+        (cfg.eps * n1 / nn).powf(1.0 / (n_ord as f64 - 1.0))
+    } else if nn > 0.0 {
+        (cfg.eps / nn).powf(1.0 / n_ord as f64)
+    } else {
+        f64::INFINITY
+    };
+    match geometric::detect(&series.u) {
+        Some(g) if g.distance <= a => (g.distance, Some(g.distance)),
+        _ => (a, None),
+    }
 }
 
 /// Linearizes at the step start and corrects it (damped Newton at fixed
@@ -314,6 +335,10 @@ fn run_implicit(
     let atol = 1e-13 * dae.model.length_scale;
     let mut last_dof = 0;
     let settle_tol = cfg.residual_tol * 1e-3;
+    let mut stop = TimeStop::End;
+    // Auto: steps until the series is tried again, and the current period.
+    let mut probe_wait = 0usize;
+    let mut probe_every = 1usize;
     let per_node = crate::fe::dof::PER_NODE;
     let mut translation = vec![false; s.u.len()];
     for (full, free) in dae.model.free.iter().enumerate() {
@@ -362,6 +387,53 @@ fn run_implicit(
         }
         if done {
             break;
+        }
+        if cfg.stepping == Stepping::Auto && probe_wait == 0 {
+            // The series from the settled start: its length against the
+            // implicit step's.
+            let probe = dae.linearize(&s).and_then(|_| dae.series(&s));
+            if let Ok(series) = probe {
+                let horizon = next_kink(kinks, s.t, cfg.t_end);
+                let (a_exp, found) = series_length(dae, &series, cfg);
+                let a = a_exp.min(horizon - s.t);
+                if a >= length && a >= cfg.min_step {
+                    let t1 = s.t + a;
+                    while next_out < cfg.outputs.len()
+                        && cfg.outputs[next_out] <= t1 * (1.0 + 1e-14)
+                    {
+                        let to = cfg.outputs[next_out];
+                        let st = evaluate(dae, &series, &s, to - s.t);
+                        samples.push(sample(dae, &st, to)?);
+                        next_out += 1;
+                    }
+                    let t0 = s.t;
+                    s = evaluate(dae, &series, &s, a);
+                    if (horizon - t1).abs() <= 1e-12 * horizon.max(1.0) {
+                        s.t = horizon;
+                    }
+                    scale = scale.max(size_of(&s.u));
+                    h = h.max(a);
+                    probe_every = 1;
+                    stats.steps += 1;
+                    progress(s.t, stats.steps);
+                    if let Some(d) = found {
+                        stop = TimeStop::Singularity {
+                            t: t0 + d,
+                            node: largest_node(dae, &series.u[cfg.order]),
+                        };
+                        break;
+                    }
+                    continue;
+                }
+                probe_every = (probe_every * 2).min(16);
+            } else {
+                probe_every = 16;
+            }
+            probe_wait = probe_every;
+            // The series' factorization replaced the step's.
+            dae.factor_implicit(length * RODAS4.gamma, s.t)?;
+        } else {
+            probe_wait = probe_wait.saturating_sub(1);
         }
         let accepted: Trial = loop {
             let attempt =
@@ -427,12 +499,13 @@ fn run_implicit(
         }
         scale = scale.max(size_of(&s.u));
         stats.steps += 1;
+        stats.implicit += 1;
         progress(s.t, stats.steps);
     }
     stats.factorizations = dae.factorizations;
     Ok(TimeRun {
         samples,
-        stop: TimeStop::End,
+        stop,
         stats,
         skipped: dae.skipped.clone(),
     })

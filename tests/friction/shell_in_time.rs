@@ -12,6 +12,7 @@
 
 use anm::run::shell_time;
 use anm::scene::shell::load;
+use anm::shell::time_path::Stepping;
 use std::path::Path;
 
 fn scene(name: &str) -> anm::scene::shell::ShellScene {
@@ -34,18 +35,19 @@ fn sliding_plate_carries_the_full_slip_friction_force() {
     // The implicit step (default) for each law and down to omega Vc = V/100,
     // where the explicit series would need ~(V/(omega Vc))² steps; the
     // explicit series where it is cheap (q = 1).
-    for (q, omega, implicit) in [
-        (0.0, 0.3, true),
-        (0.5, 0.3, true),
-        (1.0, 0.3, true),
-        (0.0, 0.01, true),
-        (1.0, 0.3, false),
+    for (q, omega, stepping) in [
+        (0.0, 0.3, Stepping::Auto),
+        (0.5, 0.3, Stepping::Auto),
+        (1.0, 0.3, Stepping::Auto),
+        (0.0, 0.01, Stepping::Auto),
+        (0.0, 0.3, Stepping::Implicit),
+        (1.0, 0.3, Stepping::Explicit),
     ] {
         let mut sc = scene("sliding-plate");
         let fr = sc.friction.as_mut().expect("a friction scene");
         fr.law.q = q;
         fr.law.omega = omega;
-        fr.implicit = implicit;
+        fr.stepping = stepping;
         let law = fr.law;
         let r = shell_time::run(&sc, None).expect("runs to t_end");
         assert_eq!(r.stop, "end");
@@ -57,9 +59,10 @@ fn sliding_plate_carries_the_full_slip_friction_force() {
         let rel = (reaction - expected).abs() / expected;
         let across = end(&r, "ft_y").abs() / end(&r, "ft_x").abs();
         println!(
-            "| {q} | {omega} | {} | {} | {reaction:.6} | {expected:.6} | {rel:.1e} | {across:.1e} |",
-            if implicit { "implicit" } else { "explicit" },
-            r.steps
+            "| {q} | {omega} | {} | {} ({}) | {reaction:.6} | {expected:.6} | {rel:.1e} | {across:.1e} |",
+            stepping.name(),
+            r.steps,
+            r.implicit_steps
         );
         assert!(rel <= 5e-3, "q = {q}: {reaction} N vs {expected} N");
         // Along V: the friction on the plate points +x, nothing across.

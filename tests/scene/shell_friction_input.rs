@@ -232,20 +232,29 @@ fn in_time_a_translation_must_keep_the_surface_in_place() {
 
 #[test]
 fn time_step_is_read_and_bad_values_are_named() {
-    // Default: implicit steps; "explicit" selects the series.
-    assert!(load(Path::new(BASE)).unwrap().friction.unwrap().implicit);
-    let p = scene(
-        "explicit.toml",
-        &[("[solver]\n", "[solver]\ntime_step = \"explicit\"\n")],
+    use anm::shell::time_path::Stepping;
+    // Default: auto; "implicit" and "explicit" select one step.
+    assert_eq!(
+        load(Path::new(BASE)).unwrap().friction.unwrap().stepping,
+        Stepping::Auto
     );
-    assert!(!load(&p).unwrap().friction.unwrap().implicit);
+    for (name, stepping) in [
+        ("implicit", Stepping::Implicit),
+        ("explicit", Stepping::Explicit),
+    ] {
+        let p = scene(
+            &format!("{name}.toml"),
+            &[("[solver]\n", &format!("[solver]\ntime_step = \"{name}\"\n"))],
+        );
+        assert_eq!(load(&p).unwrap().friction.unwrap().stepping, stepping);
+    }
     expect_invalid(
         &scene(
             "time-step-bad.toml",
             &[("[solver]\n", "[solver]\ntime_step = \"rosenbrock\"\n")],
         ),
         "solver.time_step",
-        "\"implicit\" or \"explicit\"",
+        "\"auto\", \"implicit\" or \"explicit\"",
     );
     // A static scene (no [friction]) has no steps in time.
     let text = std::fs::read_to_string("scenes/verification/sliding-plate.toml").unwrap();
