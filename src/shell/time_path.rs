@@ -1,15 +1,22 @@
-//! The path in time of the shell with friction: Taylor steps of
-//! [`super::friction_dae`], each from one factorization, with the
-//! consistency (Newton) correction at a step start only where the
-//! equilibrium residual test fails (DESIGN §2, §7).
+//! The path in time of the shell with friction (DESIGN §2, §7), by one of
+//! two steps, each from one factorization ([`TimeConfig::stepping`]):
 //!
-//! Step length: the ratio rule a = (eps |U_1| / |U_N|)^(1/(N−1)) on the
-//! displacements over the model's length scale, never across a kink of the
-//! ramps, an output time or t_end. Stops: t_end; a geometric series
-//! (Cochelin–Medale test, [`crate::series::geometric`]) whose singular point
-//! lies within the step (the quasi-static solution ceases to exist there:
-//! the time and the node of the largest last term are reported); a step
-//! shorter than `min_step` (collapse, with the same diagnosis).
+//! - the Taylor series of [`super::friction_dae`], with the consistency
+//!   (Newton) correction at a step start only where the equilibrium residual
+//!   test fails. Step length: the ratio rule a = (eps |U_1| / |U_N|)^(1/(N−1))
+//!   on the displacements over the model's length scale, never across a
+//!   kink of the ramps or t_end (output times are summed from the series).
+//!   Stops: a geometric series (Cochelin–Medale test,
+//!   [`crate::series::geometric`]) whose singular point lies within the step
+//!   (the quasi-static solution ceases to exist there: the time and the node
+//!   of the largest last term are reported);
+//! - the implicit RODAS4 step of [`super::implicit_step`], settled onto the
+//!   equilibrium at its start, error-controlled, ending on output times and
+//!   kinks ([`run_implicit`]); `auto` takes the series instead wherever its
+//!   step reaches as far.
+//!
+//! Both stop with a diagnosis (time, node) when the step collapses below
+//! `min_step` or the step budget is spent.
 
 use super::friction_dae::{FrictionDae, StepSeries, TimeState};
 use crate::contact::Motion;
@@ -376,6 +383,9 @@ fn run_implicit(
             .filter(|&k| k > s.t * (1.0 + 1e-14))
             .fold(cfg.t_end, f64::min);
         let mut length = h.min(target - s.t);
+        // A step cut short to land on an output time or a kink says
+        // nothing against the longer one: the next step starts from it.
+        let clipped = length < h;
         dae.prepare(&s)?;
         dae.factor_implicit(length * RODAS4.gamma, s.t)?;
         let rel = implicit_step::settle(dae, &mut s, settle_tol)?;
@@ -492,7 +502,11 @@ fn run_implicit(
         } else {
             5.0
         };
-        h = length * grow;
+        h = if clipped && (accepted.end.t - target).abs() <= 1e-12 * target.abs().max(1.0) {
+            h.max(length * grow)
+        } else {
+            length * grow
+        };
         s = accepted.end;
         if (s.t - target).abs() <= 1e-12 * target.abs().max(1.0) {
             s.t = target;
