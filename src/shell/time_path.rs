@@ -497,6 +497,7 @@ fn run_implicit(
             }
             dae.factor_implicit(length * RODAS4.gamma, s.t)?;
         };
+        last_dof = accepted.worst_dof;
         let grow = if accepted.error > 0.0 {
             (0.9 * accepted.error.powf(-1.0 / ERROR_ORDER)).clamp(0.2, 5.0)
         } else {
