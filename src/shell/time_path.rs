@@ -178,30 +178,67 @@ pub fn run(
                 ),
             });
         }
-        let t1 = s.t + a;
-        while next_out < cfg.outputs.len() && cfg.outputs[next_out] <= t1 * (1.0 + 1e-14) {
-            let to = cfg.outputs[next_out];
-            let st = evaluate(dae, &series, &s, to - s.t);
-            samples.push(sample(dae, &st, to)?);
-            next_out += 1;
-        }
-        s = evaluate(dae, &series, &s, a);
-        if (horizon - t1).abs() <= 1e-12 * horizon.max(1.0) {
-            s.t = horizon;
-        }
+        s = series_step(
+            dae,
+            cfg,
+            &series,
+            &s,
+            a,
+            horizon,
+            &mut next_out,
+            &mut samples,
+        )?;
         stats.steps += 1;
         progress(s.t, stats.steps);
         if !matches!(stop, TimeStop::End) {
             break;
         }
     }
+    Ok(finish(dae, samples, stop, stats))
+}
+
+/// The series step of length a from s: the output times it covers are
+/// summed from the series into `samples`; the end lands on `horizon` when
+/// within round-off of it.
+#[allow(clippy::too_many_arguments)]
+fn series_step(
+    dae: &FrictionDae,
+    cfg: &TimeConfig,
+    series: &StepSeries,
+    s: &TimeState,
+    a: f64,
+    horizon: f64,
+    next_out: &mut usize,
+    samples: &mut Vec<TimeSample>,
+) -> Result<TimeState> {
+    let t1 = s.t + a;
+    while *next_out < cfg.outputs.len() && cfg.outputs[*next_out] <= t1 * (1.0 + 1e-14) {
+        let to = cfg.outputs[*next_out];
+        let st = evaluate(dae, series, s, to - s.t);
+        samples.push(sample(dae, &st, to)?);
+        *next_out += 1;
+    }
+    let mut end = evaluate(dae, series, s, a);
+    if (horizon - t1).abs() <= 1e-12 * horizon.max(1.0) {
+        end.t = horizon;
+    }
+    Ok(end)
+}
+
+/// The run's result with the DAE's counters.
+fn finish(
+    dae: &FrictionDae,
+    samples: Vec<TimeSample>,
+    stop: TimeStop,
+    mut stats: TimeStats,
+) -> TimeRun {
     stats.factorizations = dae.factorizations;
-    Ok(TimeRun {
+    TimeRun {
         samples,
         stop,
         stats,
         skipped: dae.skipped.clone(),
-    })
+    }
 }
 
 /// The first kink of the ramps after t, or t_end.
@@ -407,20 +444,17 @@ fn run_implicit(
                 let (a_exp, found) = series_length(dae, &series, cfg);
                 let a = a_exp.min(horizon - s.t);
                 if a >= length && a >= cfg.min_step {
-                    let t1 = s.t + a;
-                    while next_out < cfg.outputs.len()
-                        && cfg.outputs[next_out] <= t1 * (1.0 + 1e-14)
-                    {
-                        let to = cfg.outputs[next_out];
-                        let st = evaluate(dae, &series, &s, to - s.t);
-                        samples.push(sample(dae, &st, to)?);
-                        next_out += 1;
-                    }
                     let t0 = s.t;
-                    s = evaluate(dae, &series, &s, a);
-                    if (horizon - t1).abs() <= 1e-12 * horizon.max(1.0) {
-                        s.t = horizon;
-                    }
+                    s = series_step(
+                        dae,
+                        cfg,
+                        &series,
+                        &s,
+                        a,
+                        horizon,
+                        &mut next_out,
+                        &mut samples,
+                    )?;
                     scale = scale.max(size_of(&s.u));
                     h = h.max(a);
                     probe_every = 1;
@@ -517,13 +551,7 @@ fn run_implicit(
         stats.implicit += 1;
         progress(s.t, stats.steps);
     }
-    stats.factorizations = dae.factorizations;
-    Ok(TimeRun {
-        samples,
-        stop,
-        stats,
-        skipped: dae.skipped.clone(),
-    })
+    Ok(finish(dae, samples, stop, stats))
 }
 
 /// The node (0-based) of a free dof.
