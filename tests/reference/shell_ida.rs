@@ -65,8 +65,10 @@ fn anm_implicit_steps_agree_with_ida_on_the_shell_residual() {
 /// rtol 1e-12 (max relative difference of the translations over the output
 /// times), with steps and wall time (meaningful in a release build:
 /// `cargo test --release --features reference --test reference
-/// work_precision -- --nocapture`). Asserts only that every run reaches
-/// t_end and that the errors fall with the tolerance.
+/// work_precision -- --nocapture`). Asserts only that every ANM run
+/// reaches t_end and that its error does not grow by more than 1.5× as eps
+/// tightens (it sits at 7.1e-10 for every eps here: outputs, kinks and the
+/// residual test set the steps); the table is the measurement.
 #[test]
 fn work_precision_on_the_coarse_capstan() {
     let sc = coarse_capstan("work-precision");
