@@ -306,6 +306,7 @@ pub fn parse(path: &Path, text: &str) -> Result<Mesh> {
         groups,
         edge_groups,
         surface_groups,
+        grid: None,
     })
 }
 

@@ -16,6 +16,7 @@
 
 pub mod gmsh;
 pub mod gmsh_write;
+pub mod strip_path;
 pub mod structured;
 
 use crate::error::{Error, Result};
@@ -44,6 +45,86 @@ pub struct Mesh {
     pub edge_groups: BTreeMap<String, Vec<[usize; 2]>>,
     /// Quadrilaterals (indices into `quads`) of the surface groups, sorted.
     pub surface_groups: BTreeMap<String, Vec<usize>>,
+    /// The (s, t) layout of a built-in structured mesh; None for gmsh.
+    pub grid: Option<Grid>,
+}
+
+/// The node and element layout of a structured mesh (see
+/// [`structured::map`]): node (i, j), i = 0..=nx across s, j = 0..=ny
+/// along t, is j (nx + 1) + i; element (i, j) is j nx + i, between node rows
+/// j and j + 1. Rows of constant t are the cross-sections of a strip.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Grid {
+    pub nx: usize,
+    pub ny: usize,
+}
+
+impl Grid {
+    pub fn node(&self, i: usize, j: usize) -> usize {
+        j * (self.nx + 1) + i
+    }
+
+    pub fn element(&self, i: usize, j: usize) -> usize {
+        j * self.nx + i
+    }
+
+    /// The nodes of row j (constant t), in increasing s.
+    pub fn row(&self, j: usize) -> Vec<usize> {
+        (0..=self.nx).map(|i| self.node(i, j)).collect()
+    }
+
+    /// The row j whose nodes are exactly `nodes` (sorted), if any.
+    pub fn row_of(&self, nodes: &[usize]) -> Option<usize> {
+        let first = *nodes.first()?;
+        let j = first / (self.nx + 1);
+        (j <= self.ny && nodes == self.row(j).as_slice()).then_some(j)
+    }
+
+    /// The cross-section at node row j: on each side that has elements
+    /// (row j − 1 below, row j above), every element node on the row with
+    /// its neighbour across the side (same i, the next row away).
+    pub fn cut(&self, j: usize, quads: &[[usize; 4]]) -> Cut {
+        let mut sides = Vec::new();
+        let stride = self.nx + 1;
+        for (rows, away) in [(j.checked_sub(1), -1i64), ((j < self.ny).then_some(j), 1)] {
+            let Some(je) = rows else { continue };
+            let mut side = Vec::new();
+            for i in 0..self.nx {
+                let e = self.element(i, je);
+                for (local, &node) in quads[e].iter().enumerate() {
+                    if node / stride == j {
+                        let neighbour = (node as i64 + away * stride as i64) as usize;
+                        side.push(CutTerm {
+                            element: e,
+                            local,
+                            node,
+                            neighbour,
+                        });
+                    }
+                }
+            }
+            sides.push(side);
+        }
+        Cut { row: j, sides }
+    }
+}
+
+/// A cross-section of a structured mesh (a node row) as the element nodes
+/// on each of its sides: what the force carried across it needs.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Cut {
+    pub row: usize,
+    pub sides: Vec<Vec<CutTerm>>,
+}
+
+/// Node `node` of element `element` (its `local`-th) on the cut, and the
+/// node `neighbour` next to it on that element's side.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CutTerm {
+    pub element: usize,
+    pub local: usize,
+    pub node: usize,
+    pub neighbour: usize,
 }
 
 impl Mesh {

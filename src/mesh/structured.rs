@@ -18,12 +18,20 @@ use std::f64::consts::PI;
 
 /// Maps the unit square with `f(s, t) = (position, unit normal)`.
 pub fn map(label: &str, nx: usize, ny: usize, f: impl Fn(f64, f64) -> (Vec3, Vec3)) -> Mesh {
+    grid(label, nx, ny, |i, j| {
+        f(i as f64 / nx as f64, j as f64 / ny as f64)
+    })
+}
+
+/// The structured mesh of node (i, j) ↦ `f(i, j) = (position, unit
+/// normal)`, i = 0..=nx, j = 0..=ny (layout and groups: module doc).
+pub fn grid(label: &str, nx: usize, ny: usize, f: impl Fn(usize, usize) -> (Vec3, Vec3)) -> Mesh {
     let mut nodes = Vec::new();
     let mut normals = Vec::new();
     let mut groups: BTreeMap<String, Vec<usize>> = BTreeMap::new();
     for j in 0..=ny {
         for i in 0..=nx {
-            let (x, n) = f(i as f64 / nx as f64, j as f64 / ny as f64);
+            let (x, n) = f(i, j);
             let id = nodes.len();
             nodes.push(x);
             normals.push(n.normalize());
@@ -85,6 +93,7 @@ pub fn map(label: &str, nx: usize, ny: usize, f: impl Fn(f64, f64) -> (Vec3, Vec
         groups,
         edge_groups,
         surface_groups,
+        grid: Some(super::Grid { nx, ny }),
     }
 }
 

@@ -27,20 +27,11 @@ pub fn write_vtu(
     quads: &[[usize; 4]],
     data: &[PointData],
 ) -> Result<()> {
-    let mut s = String::new();
-    let _ = writeln!(s, r#"<?xml version="1.0"?>"#);
-    let _ = writeln!(
-        s,
-        r#"<VTKFile type="UnstructuredGrid" version="0.1" byte_order="LittleEndian">"#
-    );
-    let _ = writeln!(s, "<UnstructuredGrid>");
-    let _ = writeln!(
-        s,
-        r#"<Piece NumberOfPoints="{}" NumberOfCells="{}">"#,
-        points.len(),
-        quads.len()
-    );
-    let _ = writeln!(s, "<PointData>");
+    write_vtu_cells(path, points, quads, data, &[])
+}
+
+/// The data arrays of one section (PointData or CellData).
+fn data_arrays(s: &mut String, data: &[PointData]) {
     for d in data {
         match d {
             PointData::Scalar(name, v) => {
@@ -70,7 +61,37 @@ pub fn write_vtu(
         }
         let _ = writeln!(s, "</DataArray>");
     }
+}
+
+/// [`write_vtu`] with cell data too (one value per quadrilateral).
+pub fn write_vtu_cells(
+    path: &Path,
+    points: &[Vector3<f64>],
+    quads: &[[usize; 4]],
+    data: &[PointData],
+    cells: &[PointData],
+) -> Result<()> {
+    let mut s = String::new();
+    let _ = writeln!(s, r#"<?xml version="1.0"?>"#);
+    let _ = writeln!(
+        s,
+        r#"<VTKFile type="UnstructuredGrid" version="0.1" byte_order="LittleEndian">"#
+    );
+    let _ = writeln!(s, "<UnstructuredGrid>");
+    let _ = writeln!(
+        s,
+        r#"<Piece NumberOfPoints="{}" NumberOfCells="{}">"#,
+        points.len(),
+        quads.len()
+    );
+    let _ = writeln!(s, "<PointData>");
+    data_arrays(&mut s, data);
     let _ = writeln!(s, "</PointData>");
+    if !cells.is_empty() {
+        let _ = writeln!(s, "<CellData>");
+        data_arrays(&mut s, cells);
+        let _ = writeln!(s, "</CellData>");
+    }
     let _ = writeln!(s, "<Points>");
     let _ = writeln!(
         s,

@@ -119,6 +119,9 @@ pub fn build_model(scene: &ShellScene) -> Result<ShellModel> {
                 ),
             })?;
         m.set_motions(scene.obstacles.iter().map(|o| o.motion).collect());
+        if scene.friction.is_some() {
+            m.keep_nearest_pairs();
+        }
         if !far_nodes_may_be_skipped(&m, scene.solver.residual_tol) {
             m.search_distance = f64::INFINITY;
             let rest = vec![0.0; PER_NODE * m.n_nodes()];

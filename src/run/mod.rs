@@ -10,10 +10,12 @@
 //! A run stops at the next step end after Ctrl-C or SIGTERM
 //! ([`interrupt`]), with every file consistent with the last step.
 
+pub mod along_strip;
 pub mod build;
 pub mod interrupt;
 pub mod probe;
 pub mod recorder;
+pub mod section;
 pub mod shell;
 pub mod shell_time;
 

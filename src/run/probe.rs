@@ -131,6 +131,7 @@ pub fn evaluate(model: &ShellModel, probes: &[Probe], s: &State) -> Result<Vec<f
                 .count() as f64,
             Quantity::Lambda => s.lambda,
             Quantity::Arclength => s.arclength,
+            Quantity::Tension { cut } => super::section::tension(model, cut, s.full),
         })
         .collect())
 }

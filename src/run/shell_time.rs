@@ -8,15 +8,21 @@
 //!   R_T, v_s, |v_s| and `slip` (|v_s| > 10 omega Vc) or `stick`;
 //! - summary.json: counters, the stop and the last row;
 //! - friction.vtu (ParaView): the last state's mid-surface with the
-//!   displacement, R_N, R_T, v_s, |v_s| and stick (1) / slip (0) per node;
-//! - friction.svg: rn_total and ft_x, ft_y, ft_z, and max_slip against t.
+//!   displacement, R_N, R_T, v_s, |v_s| and stick (1) / slip (0) per node,
+//!   and the membrane stresses per element (along and across its η
+//!   direction, shear, principal min and max; run::section);
+//! - friction.svg: rn_total and ft_x, ft_y, ft_z, and max_slip against t;
+//! - along.csv, along.svg (built-in meshes): per node row of constant t,
+//!   the tension, pressure, slip and membrane stresses (run::along_strip).
 
+use super::along_strip;
 use super::build::build_model;
 use super::probe::{self, State};
+use super::section::{MembraneStress, membrane_stress};
 use crate::contact::Motion;
 use crate::error::{Error, Result};
 use crate::output::plot::{Curve, Panel, draw};
-use crate::output::vtk::{PointData, write_vtu};
+use crate::output::vtk::{PointData, write_vtu_cells};
 use crate::scene::shell::ShellScene;
 use crate::series::ContinuationProblem;
 use crate::shell::friction_dae::{FrictionDae, TimeLaws};
@@ -280,6 +286,19 @@ pub fn run_with(scene: &ShellScene, out_dir: Option<&Path>, progress: bool) -> R
         w.flush().map_err(|e| write_err(&file)(e.to_string()))?;
         write_fields(&dir.join("friction.vtu"), scene, &dae, last)?;
         plot(&dir.join("friction.svg"), &head, &rows)?;
+        if let Some(grid) = &scene.mesh.grid {
+            let along = along_strip::rows(
+                &dae.model,
+                grid,
+                &scene.mesh.quads,
+                scene.thickness,
+                &last.full,
+                &last.friction,
+                10.0 * law.omega * law.vc,
+            );
+            along_strip::write_csv(&dir.join("along.csv"), &along)?;
+            along_strip::plot(&dir.join("along.svg"), &along)?;
+        }
         let file = dir.join("summary.json");
         let text =
             serde_json::to_string_pretty(&report).map_err(|e| write_err(&file)(e.to_string()))?;
@@ -313,7 +332,11 @@ fn write_fields(path: &Path, scene: &ShellScene, dae: &FrictionDae, s: &TimeSamp
         };
     }
     let speed = slip.iter().map(|v| v.norm()).collect();
-    write_vtu(
+    let stress: Vec<_> = (0..scene.mesh.quads.len())
+        .map(|e| membrane_stress(&dae.model, e, &s.full, scene.thickness))
+        .collect();
+    let cell = |f: fn(&MembraneStress) -> f64| stress.iter().map(f).collect();
+    write_vtu_cells(
         path,
         &x,
         &scene.mesh.quads,
@@ -324,6 +347,13 @@ fn write_fields(path: &Path, scene: &ShellScene, dae: &FrictionDae, s: &TimeSamp
             PointData::Vector("slip_velocity", slip),
             PointData::Scalar("slip_speed", speed),
             PointData::Scalar("stick", stick),
+        ],
+        &[
+            PointData::Scalar("stress_along", cell(|m| m.along)),
+            PointData::Scalar("stress_across", cell(|m| m.across)),
+            PointData::Scalar("stress_shear", cell(|m| m.shear)),
+            PointData::Scalar("stress_min", cell(|m| m.min)),
+            PointData::Scalar("stress_max", cell(|m| m.max)),
         ],
     )
 }

@@ -13,7 +13,7 @@ use crate::contact::{FrictionLaw, Motion, Obstacle};
 use crate::error::Result;
 use crate::fe::dof::{Component, Dof};
 use crate::linalg::{Backend, Choice};
-use crate::mesh::{Mesh, Vec3, gmsh, structured};
+use crate::mesh::{Mesh, Vec3, gmsh, strip_path, structured};
 use crate::series::ContinuationConfig;
 use crate::series::newton::{Control, NewtonConfig};
 use crate::shell::Material;
@@ -67,6 +67,14 @@ struct RawMesh {
     latitude: Option<[f64; 2]>,
     divisions: Option<[usize; 2]>,
     node_tolerance: Option<f64>,
+    start: Option<[f64; 2]>,
+    end: Option<[f64; 2]>,
+    rollers: Option<Vec<String>>,
+    turn: Option<Vec<String>>,
+    offset: Option<f64>,
+    element_length: Option<f64>,
+    arc_element_length: Option<f64>,
+    divisions_across: Option<usize>,
 }
 
 #[derive(Deserialize)]
@@ -307,6 +315,11 @@ pub enum Quantity {
     Lambda,
     /// Scaled arclength a summed along the path (dimensionless).
     Arclength,
+    /// The force carried across a node row of a structured mesh (a
+    /// cross-section of a strip: run::section).
+    Tension {
+        cut: crate::mesh::Cut,
+    },
 }
 
 /// A named output: one history.csv column.
@@ -421,10 +434,7 @@ struct Ctx<'a> {
 
 impl Ctx<'_> {
     fn finite3(&self, key: &str, v: [f64; 3]) -> Result<Vec3> {
-        for x in v {
-            self.c.finite(key, x)?;
-        }
-        Ok(v3(v))
+        finite3(&self.c, key, v)
     }
 
     fn group(&self, name: &str, key: &str) -> Result<Vec<usize>> {
@@ -506,7 +516,8 @@ pub fn load(path: &Path) -> Result<ShellScene> {
         ));
     }
     let thickness = c.positive("shell.thickness", raw.shell.thickness)?;
-    let mesh = mesh(&c, path, &raw.mesh)?;
+    let obstacles = obstacles(&c, &raw.obstacle)?;
+    let mesh = mesh(&c, path, &raw.mesh, &obstacles)?;
     let directors = mesh.directors()?;
     let size = mesh.size();
     let tol = match raw.mesh.node_tolerance {
@@ -564,7 +575,6 @@ pub fn load(path: &Path) -> Result<ShellScene> {
             "missing: nothing drives the path: give a [[load]], a [[fix]] with a non-zero `value`, or a translating [[obstacle]] with [contact] (all scaled by lambda)",
         ));
     }
-    let obstacles = obstacles(&ctx, &raw.obstacle)?;
     let contact = match &raw.contact {
         Some(ct) => {
             if obstacles.is_empty() {
@@ -667,7 +677,7 @@ pub fn load(path: &Path) -> Result<ShellScene> {
 }
 
 /// The mesh: a gmsh file or a built-in structured mesh.
-fn mesh(c: &Checker, path: &Path, m: &RawMesh) -> Result<Mesh> {
+fn mesh(c: &Checker, path: &Path, m: &RawMesh, obstacles: &[ObstacleSpec]) -> Result<Mesh> {
     let deg = |key: &str, v: Option<[f64; 2]>| -> Result<(f64, f64)> {
         let v = v.ok_or_else(|| c.fail(key, "missing: required by this mesh type"))?;
         for x in v {
@@ -731,7 +741,10 @@ fn mesh(c: &Checker, path: &Path, m: &RawMesh) -> Result<Mesh> {
                 ("mesh.longitude", m.longitude.is_some()),
                 ("mesh.latitude", m.latitude.is_some()),
                 ("mesh.divisions", m.divisions.is_some()),
-            ] {
+            ]
+            .into_iter()
+            .chain(strip_keys(m))
+            {
                 unused(k, present, "file")?;
             }
             let file = relative_to(path, f);
@@ -745,6 +758,11 @@ fn mesh(c: &Checker, path: &Path, m: &RawMesh) -> Result<Mesh> {
         }
         (None, Some(kind)) => {
             let kind = kind.as_str();
+            if kind != "strip" {
+                for (k, present) in strip_keys(m) {
+                    unused(k, present, kind)?;
+                }
+            }
             let mesh = match kind {
                 "rectangle" => {
                     unused("mesh.radius", m.radius.is_some(), kind)?;
@@ -807,10 +825,23 @@ fn mesh(c: &Checker, path: &Path, m: &RawMesh) -> Result<Mesh> {
                     let (nr, nt) = divisions()?;
                     structured::annulus(r[0], r[1], a0, a1, nr, nt)
                 }
+                "strip" => {
+                    for (k, present) in [
+                        ("mesh.y", m.y.is_some()),
+                        ("mesh.radius", m.radius.is_some()),
+                        ("mesh.angle", m.angle.is_some()),
+                        ("mesh.longitude", m.longitude.is_some()),
+                        ("mesh.latitude", m.latitude.is_some()),
+                        ("mesh.divisions", m.divisions.is_some()),
+                    ] {
+                        unused(k, present, kind)?;
+                    }
+                    strip(c, m, obstacles)?
+                }
                 other => {
                     return Err(c.fail(
                         "mesh.type",
-                        format!("unknown mesh type `{other}` (known: rectangle, cylinder, sphere, annulus)"),
+                        format!("unknown mesh type `{other}` (known: rectangle, cylinder, sphere, annulus, strip)"),
                     ));
                 }
             };
@@ -818,9 +849,145 @@ fn mesh(c: &Checker, path: &Path, m: &RawMesh) -> Result<Mesh> {
         }
         _ => Err(c.fail(
             "mesh",
-            "give exactly one of `file` (gmsh .msh 4.1) or `type` (rectangle, cylinder, sphere, annulus)",
+            "give exactly one of `file` (gmsh .msh 4.1) or `type` (rectangle, cylinder, sphere, annulus, strip)",
         )),
     }
+}
+
+/// The keys only the `strip` mesh reads, and whether each is given.
+fn strip_keys(m: &RawMesh) -> [(&'static str, bool); 8] {
+    [
+        ("mesh.start", m.start.is_some()),
+        ("mesh.end", m.end.is_some()),
+        ("mesh.rollers", m.rollers.is_some()),
+        ("mesh.turn", m.turn.is_some()),
+        ("mesh.offset", m.offset.is_some()),
+        ("mesh.element_length", m.element_length.is_some()),
+        ("mesh.arc_element_length", m.arc_element_length.is_some()),
+        ("mesh.divisions_across", m.divisions_across.is_some()),
+    ]
+}
+
+/// `type = "strip"`: the strip from `start` over the named cylinder
+/// obstacles (axes along x) to `end` ([`strip_path`]).
+fn strip(c: &Checker, m: &RawMesh, obstacles: &[ObstacleSpec]) -> Result<Mesh> {
+    let need = |key: &str, v: Option<[f64; 2]>| -> Result<[f64; 2]> {
+        let v = v.ok_or_else(|| c.fail(key, "missing: required by a `strip` mesh"))?;
+        for x in v {
+            c.finite(key, x)?;
+        }
+        Ok(v)
+    };
+    let start = need("mesh.start", m.start)?;
+    let end = need("mesh.end", m.end)?;
+    let width = need("mesh.x", m.x)?;
+    if !(width[1] > width[0]) {
+        return Err(c.fail("mesh.x", format!("needs min < max, got {width:?}")));
+    }
+    let names = m
+        .rollers
+        .as_ref()
+        .filter(|r| !r.is_empty())
+        .ok_or_else(|| {
+            c.fail(
+                "mesh.rollers",
+                "missing: the names of the cylinder obstacles the strip wraps, in order",
+            )
+        })?;
+    let turns = m.turn.as_ref().ok_or_else(|| {
+        c.fail(
+            "mesh.turn",
+            "missing: `cw` or `ccw` per roller (seen from +x)",
+        )
+    })?;
+    if turns.len() != names.len() {
+        return Err(c.fail(
+            "mesh.turn",
+            format!("gives {} turns for {} rollers", turns.len(), names.len()),
+        ));
+    }
+    let mut rollers = Vec::with_capacity(names.len());
+    for (k, (name, turn)) in names.iter().zip(turns).enumerate() {
+        let key = format!("mesh.rollers[{k}]");
+        let ob = obstacles.iter().find(|o| &o.name == name).ok_or_else(|| {
+            c.fail(
+                &key,
+                format!(
+                    "no obstacle named `{name}` (have: {})",
+                    obstacles
+                        .iter()
+                        .map(|o| o.name.as_str())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ),
+            )
+        })?;
+        let Obstacle::Cylinder {
+            centre,
+            axis,
+            radius,
+        } = ob.shape
+        else {
+            return Err(c.fail(&key, format!("`{name}` is not a cylinder")));
+        };
+        if axis.x.abs() < 1.0 - 1e-12 {
+            return Err(c.fail(
+                &key,
+                format!(
+                    "`{name}`'s axis must be along x, got ({}, {}, {})",
+                    axis.x, axis.y, axis.z
+                ),
+            ));
+        }
+        let turn = strip_path::Turn::from_name(turn).ok_or_else(|| {
+            c.fail(
+                &format!("mesh.turn[{k}]"),
+                format!("`{turn}`: expected `cw` or `ccw`"),
+            )
+        })?;
+        rollers.push(strip_path::Roller {
+            name: name.clone(),
+            centre: [centre.y, centre.z],
+            radius,
+            turn,
+        });
+    }
+    let offset = c.positive(
+        "mesh.offset",
+        m.offset.ok_or_else(|| {
+            c.fail(
+                "mesh.offset",
+                "missing: the strip's initial distance to the rollers (eq. 3 needs a gap)",
+            )
+        })?,
+    )?;
+    let h = c.positive(
+        "mesh.element_length",
+        m.element_length
+            .ok_or_else(|| c.fail("mesh.element_length", "missing: required by a `strip` mesh"))?,
+    )?;
+    let arc_h = match m.arc_element_length {
+        Some(v) => c.positive("mesh.arc_element_length", v)?,
+        None => h,
+    };
+    let across = m.divisions_across.ok_or_else(|| {
+        c.fail(
+            "mesh.divisions_across",
+            "missing: required by a `strip` mesh",
+        )
+    })?;
+    let p =
+        strip_path::path(start, end, &rollers, offset).map_err(|e| c.fail("mesh.rollers", e))?;
+    let along = p.length() / h.min(arc_h);
+    if across == 0 || along * across as f64 > 1e6 {
+        return Err(c.fail(
+            "mesh.divisions_across",
+            format!(
+                "needs 1 to 1e6 elements in all, got {across} across and about {along:.0} along"
+            ),
+        ));
+    }
+    Ok(strip_path::mesh(&p, width, across, h, arc_h, names))
 }
 
 /// `[[fix]]` entries into fixed dofs with their values per unit lambda. A dof
@@ -1025,8 +1192,14 @@ fn surface_group(ctx: &Ctx, name: &str, key: &str) -> Result<Vec<usize>> {
     Ok(ctx.mesh.surface(name, ctx.c.file, key)?.to_vec())
 }
 
-fn obstacles(ctx: &Ctx, raw: &[RawObstacle]) -> Result<Vec<ObstacleSpec>> {
-    let c = &ctx.c;
+fn finite3(c: &Checker, key: &str, v: [f64; 3]) -> Result<Vec3> {
+    for x in v {
+        c.finite(key, x)?;
+    }
+    Ok(v3(v))
+}
+
+fn obstacles(c: &Checker, raw: &[RawObstacle]) -> Result<Vec<ObstacleSpec>> {
     let mut out: Vec<ObstacleSpec> = vec![];
     for (i, o) in raw.iter().enumerate() {
         let key = |k: &str| format!("obstacle[{i}].{k}");
@@ -1037,7 +1210,7 @@ fn obstacles(ctx: &Ctx, raw: &[RawObstacle]) -> Result<Vec<ObstacleSpec>> {
                     format!("missing: required by a `{}` obstacle", o.kind),
                 )
             })?;
-            ctx.finite3(&key(k), v)
+            finite3(c, &key(k), v)
         };
         let not = |v: bool, k: &str| -> Result<()> {
             if v {
@@ -1099,7 +1272,7 @@ fn obstacles(ctx: &Ctx, raw: &[RawObstacle]) -> Result<Vec<ObstacleSpec>> {
                             c.fail(&mk("velocity"), "missing: required by a `translate` motion")
                         })?;
                         Motion::Translate {
-                            velocity: ctx.finite3(&mk("velocity"), v)?,
+                            velocity: finite3(c, &mk("velocity"), v)?,
                         }
                     }
                     "rotate" => {
@@ -1287,7 +1460,7 @@ fn axis_of(s: &str) -> Option<usize> {
 }
 
 /// The probe quantities, for error messages and docs.
-pub const QUANTITIES: &str = "ux, uy, uz, wx, wy, wz, x, y, z, reaction_x, reaction_y, reaction_z, contact_rn, contact_x, contact_y, contact_z, min_gap, contacts, lambda, arclength";
+pub const QUANTITIES: &str = "ux, uy, uz, wx, wy, wz, x, y, z, reaction_x, reaction_y, reaction_z, contact_rn, contact_x, contact_y, contact_z, min_gap, contacts, lambda, arclength, tension";
 
 fn probes(
     ctx: &Ctx,
@@ -1416,6 +1589,20 @@ fn probes(
         } else if q == "arclength" {
             no_target(q)?;
             (Quantity::Arclength, "-")
+        } else if q == "tension" {
+            let nodes = ctx.nodes(p.point, &p.group, &key)?;
+            let grid = ctx.mesh.grid.ok_or_else(|| {
+                c.fail(&key, "`tension` needs a built-in mesh (mesh.type): its cross-sections are its node rows of constant t")
+            })?;
+            let row = grid.row_of(&nodes).ok_or_else(|| {
+                c.fail(&key, "`tension` needs a group that is one node row of constant t (t0, t1, a strip's <roller>_in or <roller>_out, or a [[group]] box around one row)")
+            })?;
+            (
+                Quantity::Tension {
+                    cut: grid.cut(row, &ctx.mesh.quads),
+                },
+                "N",
+            )
         } else {
             return Err(c.fail(
                 &format!("{key}.quantity"),

@@ -332,6 +332,30 @@ impl ShellElement {
         f
     }
 
+    /// Membrane force resultant N (force per unit length) at the state:
+    /// N = t S^αβ G_α ⊗ G_β (α, β = 1, 2; S the second Piola–Kirchhoff
+    /// stress with its EAS part, G the reference basis), averaged over the
+    /// Gauss points with their area weights; a Cartesian 3×3 tensor in the
+    /// reference tangent plane (the Cauchy resultant to first order in the
+    /// strain). `s` holds (S^11, S^22, 2 S^12) (the conjugate of the tensor
+    /// strains, material.rs).
+    pub fn membrane_resultant(&self, x: &[Vec3; 4], d: &[Vec3; 4]) -> Matrix3<f64> {
+        let xv = self.vectors(x, d);
+        let e_pt: [Strain; NPT] = std::array::from_fn(|i| strain(&xv[i], &self.ref_vec[i]));
+        let (_, s_gp) = self.stresses(&e_pt);
+        let mut n = Matrix3::zeros();
+        let mut area = 0.0;
+        for (gi, (gp, s)) in self.gps.iter().zip(&s_gp).enumerate() {
+            let [g1, g2, ..] = self.ref_vec[gi];
+            let ng = g1 * g1.transpose() * s[0]
+                + g2 * g2.transpose() * s[1]
+                + (g1 * g2.transpose() + g2 * g1.transpose()) * (0.5 * s[2]);
+            n += ng * gp.da;
+            area += gp.da;
+        }
+        n / area
+    }
+
     /// The linear map from the unknowns δY of Y to the packed
     /// K(YᵀδY + δYᵀY): the change of Kg(σ) along δY at the nodal vectors Y.
     /// The column of the unknown (dim, b) has YᵀδY + δYᵀY nonzero in row

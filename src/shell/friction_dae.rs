@@ -3,7 +3,7 @@
 //! factorization per step.
 //!
 //! Unknowns: the free dofs U(t) of the shell and, at each friction node i
-//! (an active contact pair, one obstacle per node), w_i = (t_1·ẋ_i, t_2·ẋ_i),
+//! (an active contact pair; one obstacle per node, the nearest: run::build), w_i = (t_1·ẋ_i, t_2·ẋ_i),
 //! its velocity in the obstacle's tangent frame ([`super::friction_pair`]):
 //!
 //!   E(U, w, t) = R(U, λ(t)) − Σ_i R_T,i(x_i, w_i, m(t)) = 0   (equilibrium)
@@ -158,7 +158,6 @@ impl FrictionDae {
         self.skipped.clear();
         self.charts.clear();
         self.chart_start.clear();
-        let mut seen = std::collections::HashMap::new();
         for &ip in self.model.active_pairs() {
             let pair = &self.model.pairs[ip];
             let free: Vec<Option<usize>> =
@@ -166,18 +165,6 @@ impl FrictionDae {
             if free.iter().any(|f| f.is_none()) {
                 self.skipped.push(pair.node);
                 continue;
-            }
-            if let Some(other) = seen.insert(pair.node, pair.obstacle) {
-                return Err(Error::NonFinite {
-                    step: 0,
-                    param: "t",
-                    at: s.t,
-                    what: format!(
-                        "contact node {} is within the search distance of obstacles {other} and {}: friction needs one obstacle per node (reduce contact.search_distance)",
-                        pair.node + 1,
-                        pair.obstacle
-                    ),
-                });
             }
             let ob = &self.model.obstacles[pair.obstacle];
             let x = self.position(&full, pair.node);

@@ -31,10 +31,22 @@
 //! (second block scaled by the kinematic row scale): the series' matrix
 //! with h γ terms, so the step reuses its assembly.
 //!
-//! The error estimate (k_6) is measured on the translations of U only: w is
-//! algebraic and, in saturated slip, extremely sensitive to U, so an error
-//! test on it cannot pass at any step (the lesson of IDA on the point mass,
-//! README "Fair baselines").
+//! The error estimate (k_6) is measured on the translations of the friction
+//! nodes only, whose tangential parts are the differential unknowns (their
+//! normal parts, on the stiff contact law, stay in the test: without them a
+//! plate landing on a plane took a first step past the law's bend), much as
+//! IDA suppresses its algebraic variables (IDASetSuppressAlg). The other
+//! unknowns follow through the equilibrium, which the step loop checks at
+//! the step end (solver.residual_tol):
+//! - w is, in saturated slip, extremely sensitive to U, so an error test on
+//!   it cannot pass at any step (the lesson of IDA on the point mass,
+//!   README "Fair baselines");
+//! - the translations of the nodes without friction (a free span of strip
+//!   between rollers) sit on soft bending modes: the settle's residual
+//!   tolerance alone moves them by more than the error test allows near
+//!   t = 0, where the displacements are tiny, so a test on them rejects
+//!   every step however short (measured on scenes/strip-conveying.toml:
+//!   the step collapsed to 2e-13 s at t = 1.6e-7 s).
 
 use super::friction_dae::{FrictionDae, TimeState};
 use crate::error::Result;
@@ -43,17 +55,17 @@ use crate::series::rodas::{RODAS4, STAGES};
 /// One attempted step.
 pub struct Trial {
     pub end: TimeState,
-    /// The largest error estimate of the translations (m).
+    /// The largest error estimate of the friction nodes' translations (m).
     pub error: f64,
-    /// The free dof with the largest error.
+    /// A free dof of the node with the largest error.
     pub worst_dof: usize,
 }
 
 /// Attempts a step of length h from s; the DAE must be prepared at s
 /// ([`FrictionDae::prepare`]) and M/(h γ) − J factorized
-/// ([`FrictionDae::factor_implicit`]). The error estimate covers the free
-/// dofs flagged in `translation` (the directors are dimensionless).
-pub fn trial(dae: &mut FrictionDae, s: &TimeState, h: f64, translation: &[bool]) -> Result<Trial> {
+/// ([`FrictionDae::factor_implicit`]). The error estimate covers the
+/// translations of the friction nodes (module doc).
+pub fn trial(dae: &mut FrictionDae, s: &TimeState, h: f64) -> Result<Trial> {
     let tab = &RODAS4;
     let n = s.u.len();
     let np = dae.n_pairs();
@@ -112,15 +124,15 @@ pub fn trial(dae: &mut FrictionDae, s: &TimeState, h: f64, translation: &[bool])
     let u1 = combine(&s.u, &ku, &tab.m);
     let w1 = combine(&w0, &kw, &tab.m);
     let err = combine(&vec![0.0; n], &ku, &tab.e);
-    let (worst_dof, worst) = err
-        .iter()
-        .zip(translation)
-        .enumerate()
-        .filter(|(_, (_, tr))| **tr)
-        .fold(
-            (0, 0.0f64),
-            |b, (i, (v, _))| if v.abs() > b.1 { (i, v.abs()) } else { b },
-        );
+    let (worst_dof, worst) = (0..np)
+        .flat_map(|p| dae.pair_dofs(p))
+        .fold((0, 0.0f64), |b, k| {
+            if err[k].abs() > b.1 {
+                (k, err[k].abs())
+            } else {
+                b
+            }
+        });
     let mut w = s.w.clone();
     dae.scatter_w(&w1, &mut w);
     Ok(Trial {

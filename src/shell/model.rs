@@ -207,6 +207,23 @@ impl ShellModel {
         Ok(())
     }
 
+    /// Keeps, per node, only its pair with the obstacle nearest to it in
+    /// the reference configuration (the smallest delta; the first on a
+    /// tie). Friction needs one tangent frame per node, and in time the
+    /// obstacles keep their place (docs/shell-friction.md).
+    pub fn keep_nearest_pairs(&mut self) {
+        let mut nearest: std::collections::HashMap<usize, (usize, f64)> =
+            std::collections::HashMap::new();
+        for p in &self.pairs {
+            let e = nearest.entry(p.node).or_insert((p.obstacle, p.law.delta));
+            if p.law.delta < e.1 {
+                *e = (p.obstacle, p.law.delta);
+            }
+        }
+        self.pairs.retain(|p| nearest[&p.node].0 == p.obstacle);
+        self.active = search::active(&self.pairs, &self.x0, &self.obstacles, self.search_distance);
+    }
+
     pub fn n_nodes(&self) -> usize {
         self.x0.len()
     }
@@ -288,6 +305,22 @@ impl ShellModel {
             if incr { w } else { self.a30[n] + w }
         });
         (x, d)
+    }
+
+    /// Internal force of element `e` at the full state: 6 entries per node
+    /// (force on v, then on w), in the element's node order.
+    pub fn element_internal(&self, e: usize, full: &[f64]) -> [f64; 24] {
+        let el = &self.elements[e];
+        let (x, d) = self.element_state(el, full, false);
+        el.internal(&x, &d)
+    }
+
+    /// Membrane force resultant of element `e` at the full state
+    /// ([`ShellElement::membrane_resultant`], force per unit length).
+    pub fn membrane_resultant(&self, e: usize, full: &[f64]) -> nalgebra::Matrix3<f64> {
+        let el = &self.elements[e];
+        let (x, d) = self.element_state(el, full, false);
+        el.membrane_resultant(&x, &d)
     }
 
     fn vec3(full: &[f64], node: usize, off: usize) -> Vec3 {

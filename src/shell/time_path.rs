@@ -481,7 +481,7 @@ fn run_implicit(
         }
         let accepted: Trial = loop {
             // The error relative to what the test allows.
-            let attempt = implicit_step::trial(dae, &s, length, &translation).map(|mut t| {
+            let attempt = implicit_step::trial(dae, &s, length).map(|mut t| {
                 let size = size_of(&s.u).max(size_of(&t.end.u)).max(scale);
                 t.error /= (cfg.eps * size).max(atol);
                 t

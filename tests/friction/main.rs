@@ -12,3 +12,4 @@ mod roller_breakdown;
 mod shell_friction_law;
 mod shell_in_time;
 mod stiff_linear;
+mod strip_conveying;

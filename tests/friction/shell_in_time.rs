@@ -229,6 +229,66 @@ fn capstan_tension_follows_euler_eytelwein() {
     assert!(slowest > 0.99 * 0.1, "{slowest}");
 }
 
+/// Issue 10 item 4: the cross-section outputs along the capstan's arc
+/// (run::along_strip) against the closed forms of a string slipping on a
+/// cylinder: the tension at angle φ from the held end is
+/// T0 exp(f g (θ − φ)) (Euler–Eytelwein on the arc beyond φ), the contact
+/// pressure T / (b R) and the membrane stress along the strip T / (b t);
+/// ν = 0, so the stress across is 0.
+#[test]
+fn tension_pressure_and_stress_along_the_capstan_arc() {
+    let (t0, width, t, f) = (20.0, 0.05, 1e-4, 0.2);
+    let sc = capstan(180.0, f);
+    let law = sc.friction.as_ref().expect("friction").law;
+    let (run, dae) = shell_time::solve(&sc).expect("runs");
+    let last = run.samples.last().expect("samples");
+    let grid = sc.mesh.grid.expect("a built-in mesh");
+    let rows = anm::run::along_strip::rows(
+        &dae.model,
+        &grid,
+        &sc.mesh.quads,
+        sc.thickness,
+        &last.full,
+        &last.friction,
+        10.0 * law.omega * law.vc,
+    );
+    let g = 0.1 / (0.01f64 + (law.omega * law.vc).powi(2)).sqrt();
+    let (r, dphi) = (0.30000001, std::f64::consts::PI / 64.0);
+    let (mut worst_t, mut worst_p, mut worst_s) = (0.0f64, 0.0f64, 0.0f64);
+    println!(
+        "| φ (rad) | tension (N) | T0 e^(f g (θ − φ)) | rel. | pressure (Pa) | T / (b R) | rel. |"
+    );
+    println!("|---|---|---|---|---|---|---|");
+    for (j, row) in rows.iter().enumerate().take(grid.ny).skip(1) {
+        let phi = j as f64 * dphi;
+        let closed = t0 * (f * g * (std::f64::consts::PI - phi)).exp();
+        let rel_t = row.tension / closed - 1.0;
+        let rel_p = row.pressure / (row.tension / (width * r)) - 1.0;
+        let rel_s = row.stress_along / (row.tension / (width * t)) - 1.0;
+        if j % 8 == 1 {
+            println!(
+                "| {phi:.4} | {:.4} | {closed:.4} | {rel_t:.1e} | {:.1} | {:.1} | {rel_p:.1e} |",
+                row.tension,
+                row.pressure,
+                row.tension / (width * r)
+            );
+        }
+        worst_t = worst_t.max(rel_t.abs());
+        worst_p = worst_p.max(rel_p.abs());
+        worst_s = worst_s.max(rel_s.abs());
+        assert!(
+            row.stress_across_min.abs() < 1e-9 * row.stress_along,
+            "{row:?}"
+        );
+    }
+    println!(
+        "largest deviations: tension {worst_t:.1e}, pressure {worst_p:.1e}, stress {worst_s:.1e}"
+    );
+    assert!(worst_t < 1e-3, "tension {worst_t}");
+    assert!(worst_p < 1e-2, "pressure {worst_p}");
+    assert!(worst_s < 2e-3, "stress along {worst_s}");
+}
+
 /// Issue 10 items 3a and 5: the audit in time (`anm audit` on a friction
 /// scene) measures the regularization's share of the capstan's tension. ω
 /// enters through g = V/|V|_reg on f (q = 0), so between ω = 0.1 and

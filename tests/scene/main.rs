@@ -6,3 +6,4 @@ mod docs;
 mod fuzz;
 mod shell_bad_input;
 mod shell_friction_input;
+mod strip_mesh_input;

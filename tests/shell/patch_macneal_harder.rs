@@ -53,6 +53,7 @@ fn patch() -> Mesh {
         groups,
         edge_groups: BTreeMap::new(),
         surface_groups: BTreeMap::new(),
+        grid: None,
     }
 }
 

@@ -1,0 +1,192 @@
+//! Results along a structured strip (issue 10 item 4): per node row of
+//! constant t (a cross-section), the reference arclength, the tension, the
+//! contact pressure, the slip and the membrane stresses; written as
+//! along.csv and plotted as along.svg by the runs in time.
+
+use super::section::{MembraneStress, membrane_stress, tension};
+use crate::error::{Error, Result};
+use crate::mesh::{Grid, Vec3};
+use crate::output::plot::{Curve, Panel, draw};
+use crate::shell::ShellModel;
+use crate::shell::time_path::NodeFriction;
+use std::path::Path;
+
+/// One cross-section.
+#[derive(Clone, Debug, PartialEq)]
+pub struct AlongRow {
+    /// Reference arclength from row 0 (through the row centroids).
+    pub s: f64,
+    /// Force across the row (run::section).
+    pub tension: f64,
+    /// Σ R_N of the row over its tributary reference area (half of each
+    /// adjacent element row).
+    pub pressure: f64,
+    /// Largest slip speed |v_s| of the row's friction nodes (0 if none).
+    pub slip_speed: f64,
+    /// Friction nodes of the row with |v_s| > `slip_threshold`.
+    pub slip_nodes: usize,
+    /// Mean membrane stress along the strip of the adjacent elements.
+    pub stress_along: f64,
+    /// Smallest membrane stress across the strip of the adjacent elements
+    /// (negative: the transverse compression that drives wrinkling).
+    pub stress_across_min: f64,
+    /// Smallest principal membrane stress of the adjacent elements.
+    pub stress_min: f64,
+}
+
+pub const HEADER: [&str; 8] = [
+    "s",
+    "tension",
+    "pressure",
+    "slip_speed",
+    "slip_nodes",
+    "stress_along",
+    "stress_across_min",
+    "stress_min",
+];
+
+impl AlongRow {
+    pub fn values(&self) -> [f64; 8] {
+        [
+            self.s,
+            self.tension,
+            self.pressure,
+            self.slip_speed,
+            self.slip_nodes as f64,
+            self.stress_along,
+            self.stress_across_min,
+            self.stress_min,
+        ]
+    }
+}
+
+fn quad_area(x: &[Vec3; 4]) -> f64 {
+    0.5 * (x[2] - x[0]).cross(&(x[3] - x[1])).norm()
+}
+
+/// Every row of the structured mesh at the full state; `slip_threshold`
+/// tells slip from stick (10 ω Vc, as friction.csv).
+pub fn rows(
+    model: &ShellModel,
+    grid: &Grid,
+    quads: &[[usize; 4]],
+    thickness: f64,
+    full: &[f64],
+    friction: &[NodeFriction],
+    slip_threshold: f64,
+) -> Vec<AlongRow> {
+    let row_of = |node: usize| node / (grid.nx + 1);
+    let mut rn = vec![0.0; grid.ny + 1];
+    let mut slip = vec![0.0f64; grid.ny + 1];
+    let mut slipping = vec![0usize; grid.ny + 1];
+    for f in friction {
+        let j = row_of(f.node);
+        rn[j] += f.rn;
+        let v = f.slip.norm();
+        slip[j] = slip[j].max(v);
+        if v > slip_threshold {
+            slipping[j] += 1;
+        }
+    }
+    let element_rows: Vec<Vec<MembraneStress>> = (0..grid.ny)
+        .map(|je| {
+            (0..grid.nx)
+                .map(|i| membrane_stress(model, grid.element(i, je), full, thickness))
+                .collect()
+        })
+        .collect();
+    let element_area: Vec<f64> = (0..grid.ny)
+        .map(|je| {
+            (0..grid.nx)
+                .map(|i| {
+                    let q = quads[grid.element(i, je)];
+                    quad_area(&q.map(|n| model.x0[n]))
+                })
+                .sum()
+        })
+        .collect();
+    let centroid = |j: usize| {
+        let row = grid.row(j);
+        row.iter().map(|&n| model.x0[n]).sum::<Vec3>() / row.len() as f64
+    };
+    let mut s = 0.0;
+    let mut out = Vec::with_capacity(grid.ny + 1);
+    for j in 0..=grid.ny {
+        if j > 0 {
+            s += (centroid(j) - centroid(j - 1)).norm();
+        }
+        let sides: Vec<usize> = [j.checked_sub(1), (j < grid.ny).then_some(j)]
+            .into_iter()
+            .flatten()
+            .collect();
+        let adjacent: Vec<&MembraneStress> =
+            sides.iter().flat_map(|&je| &element_rows[je]).collect();
+        let area: f64 = sides.iter().map(|&je| 0.5 * element_area[je]).sum();
+        out.push(AlongRow {
+            s,
+            tension: tension(model, &grid.cut(j, quads), full),
+            pressure: rn[j] / area,
+            slip_speed: slip[j],
+            slip_nodes: slipping[j],
+            stress_along: adjacent.iter().map(|m| m.along).sum::<f64>() / adjacent.len() as f64,
+            stress_across_min: adjacent
+                .iter()
+                .map(|m| m.across)
+                .fold(f64::INFINITY, f64::min),
+            stress_min: adjacent.iter().map(|m| m.min).fold(f64::INFINITY, f64::min),
+        });
+    }
+    out
+}
+
+/// along.csv.
+pub fn write_csv(path: &Path, rows: &[AlongRow]) -> Result<()> {
+    let err = |e: csv::Error| Error::write(path, e.to_string());
+    let mut w = csv::Writer::from_path(path).map_err(err)?;
+    w.write_record(HEADER).map_err(err)?;
+    for r in rows {
+        w.write_record(r.values().map(|v| format!("{v:.12e}")))
+            .map_err(err)?;
+    }
+    w.flush().map_err(|e| Error::write(path, e.to_string()))
+}
+
+/// along.svg: tension, slip speed, and the membrane stresses with the
+/// contact pressure, against the arclength.
+pub fn plot(path: &Path, rows: &[AlongRow]) -> Result<()> {
+    let curve = |label: &'static str, f: fn(&AlongRow) -> f64| Curve {
+        label,
+        points: rows.iter().map(|r| (r.s, f(r))).collect(),
+    };
+    draw(
+        path,
+        &[
+            Panel {
+                title: "tension along the strip",
+                x_label: "s (m)",
+                y_label: "tension (N)",
+                curves: vec![curve("tension", |r| r.tension)],
+                log: (false, false),
+            },
+            Panel {
+                title: "largest slip speed of each cross-section",
+                x_label: "s (m)",
+                y_label: "|v_s| (m/s)",
+                curves: vec![curve("slip_speed", |r| r.slip_speed)],
+                log: (false, false),
+            },
+            Panel {
+                title: "membrane stresses and contact pressure",
+                x_label: "s (m)",
+                y_label: "stress (Pa)",
+                curves: vec![
+                    curve("stress_along", |r| r.stress_along),
+                    curve("stress_across_min", |r| r.stress_across_min),
+                    curve("stress_min", |r| r.stress_min),
+                    curve("pressure", |r| r.pressure),
+                ],
+                log: (false, false),
+            },
+        ],
+    )
+}

@@ -1,0 +1,78 @@
+//! Cross-section results of a structured strip (issue 10 item 4): the
+//! tension a node row carries and the membrane stresses of its elements.
+//!
+//! Tension across a cut (a free-body cut, as Abaqus' *SECTION PRINT): the
+//! part on one side S of the cut acts on the cut's nodes through the
+//! internal forces f_S(n) of S's elements. For a strip in tension T the
+//! elements on either side pull the node toward themselves, so
+//! −f_S(n) · u_S(n) summed over the cut's nodes is T, u_S(n) the unit
+//! vector from n toward its neighbour on S. Both sides give T up to the
+//! external forces at the cut's nodes (contact, friction, loads); their
+//! mean splits those evenly (at an end row, the one side present).
+
+use crate::mesh::{Cut, Vec3};
+use crate::shell::ShellModel;
+
+/// The tension carried across `cut` at the full state (force, positive
+/// when the two sides pull apart).
+pub fn tension(model: &ShellModel, cut: &Cut, full: &[f64]) -> f64 {
+    let x = model.positions(full);
+    let mut total = 0.0;
+    for side in &cut.sides {
+        let mut element = usize::MAX;
+        let mut f = [0.0; 24];
+        for t in side {
+            if t.element != element {
+                element = t.element;
+                f = model.element_internal(element, full);
+            }
+            let force = Vec3::new(f[6 * t.local], f[6 * t.local + 1], f[6 * t.local + 2]);
+            let u = (x[t.neighbour] - x[t.node]).normalize();
+            total -= force.dot(&u);
+        }
+    }
+    total / cut.sides.len().max(1) as f64
+}
+
+/// Membrane stresses (resultant / thickness) of one element in its own
+/// frame: `along` its η direction (t of a structured mesh, the strip's
+/// running direction), `across` its ξ direction, and the principal values.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MembraneStress {
+    pub along: f64,
+    pub across: f64,
+    pub shear: f64,
+    pub min: f64,
+    pub max: f64,
+}
+
+/// The membrane stresses of element `e` at the full state.
+pub fn membrane_stress(
+    model: &ShellModel,
+    e: usize,
+    full: &[f64],
+    thickness: f64,
+) -> MembraneStress {
+    let el = &model.elements[e];
+    let x: [Vec3; 4] = std::array::from_fn(|i| model.x0[el.nodes[i]]);
+    let a_xi = (x[1] + x[2] - x[0] - x[3]) * 0.5;
+    let a_eta = (x[2] + x[3] - x[0] - x[1]) * 0.5;
+    let along = a_eta.normalize();
+    let normal = a_xi.cross(&a_eta).normalize();
+    let across = along.cross(&normal);
+    let n = model.membrane_resultant(e, full) / thickness;
+    let (a, b, c) = (
+        along.dot(&(n * along)),
+        across.dot(&(n * across)),
+        along.dot(&(n * across)),
+    );
+    let mean = 0.5 * (a + b);
+    let radius = (0.25 * (a - b) * (a - b) + c * c).sqrt();
+    MembraneStress {
+        along: a,
+        across: b,
+        shear: c,
+        min: mean - radius,
+        max: mean + radius,
+    }
+}

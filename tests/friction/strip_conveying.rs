@@ -1,0 +1,106 @@
+//! Issue 10 item 4: scenes/strip-conveying.toml (a strip over three
+//! rollers, the middle one 0.5% fast) on a coarser mesh, at steady state,
+//! against closed forms:
+//! - roller 2 slips on its whole arc and drags the strip forward, so the
+//!   tension falls across it as T_in exp(−f g φ) (Euler–Eytelwein, g the
+//!   regularization's factor V / |V|_reg, φ the angle from its entry): the
+//!   exit reaction is T_in exp(−f g θ_2);
+//! - rollers 1 and 3 turn with the strip: at rest the regularized law
+//!   carries no friction, so their two sides carry the same tension and
+//!   their nodes stick.
+
+use anm::run::{along_strip, shell_time};
+use anm::scene::shell::load;
+use std::f64::consts::FRAC_PI_2;
+
+/// The conveying scene with 0.1 m elements on the spans, 0.03 m on the arcs
+/// and 2 across the width.
+fn coarse_conveying() -> anm::scene::shell::ShellScene {
+    let text = std::fs::read_to_string("scenes/strip-conveying.toml").expect("scene");
+    let text = text
+        .replace("element_length = 0.05", "element_length = 0.1")
+        .replace("arc_element_length = 0.01", "arc_element_length = 0.03")
+        .replace("divisions_across = 8", "divisions_across = 2");
+    let dir = std::env::temp_dir().join(format!("anm-conveying-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let path = dir.join("strip-conveying-coarse.toml");
+    std::fs::write(&path, text).expect("write scene");
+    load(&path).expect("scene loads")
+}
+
+#[test]
+fn conveying_strip_reaches_the_euler_eytelwein_steady_state() {
+    let sc = coarse_conveying();
+    let law = sc.friction.as_ref().expect("friction").law;
+    let (t_in, v) = (5000.0, 0.01);
+    let g = v / (v * v + (law.omega * law.vc).powi(2)).sqrt();
+    let report = shell_time::run(&sc, None).expect("runs to t_end");
+    assert_eq!(report.stop, "end");
+    let col = |name: &str| report.header.iter().position(|h| h == name).expect(name);
+    let last = report.history.last().expect("rows");
+    let before = &report.history[report.history.len() - 6];
+    let exit = last[col("exit_reaction_y")];
+    let closed = t_in * (-law.f * g * FRAC_PI_2).exp();
+    let rel = exit / closed - 1.0;
+    let drift = (exit - before[col("exit_reaction_y")]).abs() / exit;
+    println!(
+        "steps {} ({} factorizations); exit tension {exit:.3} N vs T_in exp(−f g θ2) = {closed:.3} N ({rel:.1e}); change over the last 0.1 s {drift:.1e}",
+        report.steps, report.factorizations
+    );
+    assert!(rel.abs() < 1e-2, "exit {exit} vs {closed}");
+    assert!(drift < 1e-4, "not steady: {drift}");
+    for r in ["r1", "r3"] {
+        let (a, b) = (
+            last[col(&format!("T_{r}_in"))],
+            last[col(&format!("T_{r}_out"))],
+        );
+        println!("{r}: in {a:.3} N, out {b:.3} N ({:.1e})", (a - b) / a);
+        assert!((a - b).abs() < 1e-3 * a, "{r}: {a} vs {b}");
+    }
+
+    // The tension along roller 2's arc and the slip map.
+    let (run, dae) = shell_time::solve(&sc).expect("runs");
+    let end = run.samples.last().expect("samples");
+    let grid = sc.mesh.grid.expect("a built-in mesh");
+    let threshold = 10.0 * law.omega * law.vc;
+    let rows = along_strip::rows(
+        &dae.model,
+        &grid,
+        &sc.mesh.quads,
+        sc.thickness,
+        &end.full,
+        &end.friction,
+        threshold,
+    );
+    let row_of = |group: &str| grid.row_of(&sc.mesh.groups[group]).expect("a row");
+    let (j_in, j_out) = (row_of("r2_in"), row_of("r2_out"));
+    let radius = 0.30000001;
+    let mut worst = 0.0f64;
+    for j in j_in + 1..j_out {
+        let phi = (rows[j].s - rows[j_in].s) / radius;
+        let closed = t_in * (-law.f * g * phi).exp();
+        worst = worst.max((rows[j].tension / closed - 1.0).abs());
+    }
+    println!("tension on roller 2's arc against T_in exp(−f g φ): largest deviation {worst:.1e}");
+    assert!(worst < 2e-3, "{worst}");
+    let on = |name: &str| {
+        let nodes = &sc.mesh.groups[&format!("{name}_arc")];
+        end.friction
+            .iter()
+            .filter(|f| nodes.binary_search(&f.node).is_ok())
+            .map(|f| f.slip.norm())
+            .collect::<Vec<_>>()
+    };
+    let r2 = on("r2");
+    let slowest = r2.iter().copied().fold(f64::INFINITY, f64::min);
+    println!(
+        "roller 2: {} nodes, slowest slip {slowest:.6} m/s (surface 0.01 m/s relative)",
+        r2.len()
+    );
+    assert!(!r2.is_empty() && slowest > 0.99 * v, "{slowest}");
+    for r in ["r1", "r3"] {
+        let fastest = on(r).iter().copied().fold(0.0, f64::max);
+        println!("{r}: fastest slip {fastest:.2e} m/s (stick below {threshold:.0e})");
+        assert!(fastest < threshold, "{r}: {fastest}");
+    }
+}

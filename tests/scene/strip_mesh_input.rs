@@ -1,0 +1,181 @@
+//! The `strip` mesh and the `tension` probe (issue 10 item 4): the
+//! conveying scene is read with its roller groups; bad paths, bad roller
+//! references and probes on groups that are not cross-sections stop with
+//! errors naming the file and the key.
+
+use anm::scene::shell::{Quantity, load};
+use std::path::{Path, PathBuf};
+
+const BASE: &str = "scenes/strip-conveying.toml";
+
+/// The conveying scene with `edits` (old, new) applied.
+fn scene(name: &str, edits: &[(&str, &str)]) -> PathBuf {
+    let mut text = std::fs::read_to_string(BASE).unwrap();
+    for (old, new) in edits {
+        assert!(text.contains(old), "edit `{old}` does not apply");
+        text = text.replacen(old, new, 1);
+    }
+    let d = std::env::temp_dir().join("anm-strip-mesh-input");
+    std::fs::create_dir_all(&d).unwrap();
+    let p = d.join(name);
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+#[track_caller]
+fn expect_invalid(path: &Path, key: &str, part: &str) {
+    let e = match load(path) {
+        Ok(_) => panic!("{}: expected an error on {key}", path.display()),
+        Err(e) => e,
+    };
+    let msg = e.to_string();
+    println!("{msg}");
+    assert_eq!(e.kind(), "invalid_input", "{msg}");
+    for p in [&path.file_name().unwrap().to_string_lossy(), key, part] {
+        assert!(msg.contains(p), "message `{msg}` lacks `{p}`");
+    }
+}
+
+/// The wrap angles of the scene's rollers (30, 90, 60 degrees) from the
+/// mesh: the turn of the path between a roller's entry and exit rows.
+#[test]
+fn the_conveying_strip_wraps_its_rollers_by_the_designed_angles() {
+    let s = load(Path::new(BASE)).unwrap();
+    let grid = s.mesh.grid.expect("a structured mesh");
+    for (name, degrees) in [("r1", 30.0), ("r2", 90.0), ("r3", 60.0)] {
+        let row = |g: &str| {
+            grid.row_of(&s.mesh.groups[&format!("{name}_{g}")])
+                .expect("a row")
+        };
+        let (j_in, j_out) = (row("in"), row("out"));
+        let direction = |j: usize| {
+            (s.mesh.nodes[grid.node(0, j + 1)] - s.mesh.nodes[grid.node(0, j)]).normalize()
+        };
+        // The chords of the first and last arc elements lean by half an
+        // element angle into the arc.
+        let chord =
+            (s.mesh.nodes[grid.node(0, j_in + 1)] - s.mesh.nodes[grid.node(0, j_in)]).norm();
+        let dphi = 2.0 * (chord / (2.0 * 0.30000001)).asin();
+        let turned = direction(j_in)
+            .dot(&direction(j_out - 1))
+            .clamp(-1.0, 1.0)
+            .acos()
+            + dphi;
+        println!(
+            "{name}: wrap {:.6} degrees (designed {degrees})",
+            turned.to_degrees()
+        );
+        // The roller centres were placed for R = 0.3; the strip runs at
+        // R + 1e-8, which turns its tangents by ~1e-8 rad (6e-7 degrees).
+        assert!(
+            (turned.to_degrees() - degrees).abs() < 1e-5,
+            "{name}: {}",
+            turned.to_degrees()
+        );
+    }
+    assert!(
+        s.probes
+            .iter()
+            .any(|p| matches!(p.quantity, Quantity::Tension { .. }))
+    );
+    assert!(s.mesh.groups.contains_key("wrapped"));
+}
+
+#[test]
+fn bad_strip_meshes_name_the_key() {
+    let cases: &[(&str, &str, &str, &str, &str)] = &[
+        (
+            "unknown-roller.toml",
+            "rollers = [\"r1\", \"r2\", \"r3\"]",
+            "rollers = [\"r1\", \"r9\", \"r3\"]",
+            "mesh.rollers[1]",
+            "no obstacle named `r9`",
+        ),
+        (
+            "turn-count.toml",
+            "turn = [\"cw\", \"ccw\", \"cw\"]",
+            "turn = [\"cw\", \"ccw\"]",
+            "mesh.turn",
+            "2 turns for 3 rollers",
+        ),
+        (
+            "turn-name.toml",
+            "turn = [\"cw\", \"ccw\", \"cw\"]",
+            "turn = [\"cw\", \"left\", \"cw\"]",
+            "mesh.turn[1]",
+            "`left`",
+        ),
+        (
+            "overlap.toml",
+            "centre = [0.0, 1.1660254037844386, 0.019615242270663302]",
+            "centre = [0.0, 0.4, 0.0]",
+            "mesh.rollers",
+            "from roller `r1` to roller `r2`: they overlap",
+        ),
+        (
+            "start-inside.toml",
+            "start = [-0.5, 0.30000001]",
+            "start = [0.0, 0.1]",
+            "mesh.rollers",
+            "the start point",
+        ),
+        (
+            "no-offset.toml",
+            "offset = 1e-8",
+            "offset = 0.0",
+            "mesh.offset",
+            "> 0",
+        ),
+        (
+            "no-across.toml",
+            "divisions_across = 8",
+            "divisions_across = 0",
+            "mesh.divisions_across",
+            "1 to 1e6",
+        ),
+        (
+            "axis-y.toml",
+            "axis = [1.0, 0.0, 0.0]",
+            "axis = [0.0, 1.0, 0.0]",
+            "mesh.rollers[0]",
+            "along x",
+        ),
+        (
+            "angle-key.toml",
+            "divisions_across = 8",
+            "divisions_across = 8\nangle = [0.0, 10.0]",
+            "mesh.angle",
+            "not used by a mesh of type `strip`",
+        ),
+        (
+            "start-on-rectangle.toml",
+            "type = \"strip\"",
+            "type = \"rectangle\"",
+            "mesh.start",
+            "not used by a mesh of type `rectangle`",
+        ),
+    ];
+    for (name, old, new, key, part) in cases {
+        expect_invalid(&scene(name, &[(old, new)]), key, part);
+    }
+}
+
+#[test]
+fn a_tension_probe_needs_a_cross_section() {
+    let p = scene(
+        "tension-on-arc.toml",
+        &[(
+            "quantity = \"tension\"\ngroup = \"r1_in\"",
+            "quantity = \"tension\"\ngroup = \"r1_arc\"",
+        )],
+    );
+    expect_invalid(&p, "probe[0]", "one node row of constant t");
+    let p = scene(
+        "tension-on-point.toml",
+        &[(
+            "quantity = \"tension\"\ngroup = \"r1_in\"",
+            "quantity = \"tension\"\npoint = [0.0, 2.6856406460551017, 0.8856406560551019]",
+        )],
+    );
+    expect_invalid(&p, "probe[0]", "one node row of constant t");
+}
