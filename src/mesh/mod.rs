@@ -240,6 +240,20 @@ impl Mesh {
         (d <= tol).then_some(i)
     }
 
+    /// The tributary reference area of each node: a quarter of the area
+    /// of each element around it (the lumped area of bilinear elements).
+    pub fn node_areas(&self) -> Vec<f64> {
+        let mut out = vec![0.0; self.nodes.len()];
+        for (e, q) in self.quads.iter().enumerate() {
+            let x = self.element_nodes(e);
+            let area = 0.5 * (x[2] - x[0]).cross(&(x[3] - x[1])).norm();
+            for &n in q {
+                out[n] += 0.25 * area;
+            }
+        }
+        out
+    }
+
     /// Characteristic size: the largest bounding-box extent.
     pub fn size(&self) -> f64 {
         let mut lo = Vec3::repeat(f64::INFINITY);

@@ -42,25 +42,24 @@ pub fn build_model(scene: &ShellScene) -> Result<ShellModel> {
         prescribed[d.index()] = *v;
     }
     m.set_prescribed(prescribed);
-    let add = |dead: &mut [f64], node: usize, f: Vec3| {
-        for (k, c) in Component::DISPLACEMENT.into_iter().enumerate() {
-            dead[Dof::new(node, c).index()] += f[k];
-        }
-    };
-    let x0 = &scene.mesh.nodes;
     let quads = &scene.mesh.quads;
-    let add_all = |dead: &mut [f64], f: Vec<Vec3>| {
-        for (n, fn_) in f.into_iter().enumerate() {
-            add(dead, n, fn_);
+    let own_ramp: Vec<usize> = scene
+        .friction
+        .as_ref()
+        .map(|f| f.load_ramps.iter().map(|(i, _)| *i).collect())
+        .unwrap_or_default();
+    for (i, load) in scene.loads.iter().enumerate() {
+        if own_ramp.contains(&i) {
+            // In time, with its own ramp: FrictionDae adds it (dead_pattern).
+            continue;
         }
-    };
-    for load in &scene.loads {
-        match load {
-            Load::Nodal { nodes, force } => {
-                for &n in nodes {
-                    add(&mut m.dead, n, *force);
-                }
+        if let Some(p) = dead_pattern(scene, load) {
+            for (d, v) in m.dead.iter_mut().zip(p) {
+                *d += v;
             }
+            continue;
+        }
+        match load {
             Load::Moment { nodes, moment } => {
                 for &n in nodes {
                     m.follower.push(FollowerCouple {
@@ -68,19 +67,6 @@ pub fn build_model(scene: &ShellScene) -> Result<ShellModel> {
                         moment: *moment,
                     });
                 }
-            }
-            Load::Line { edges, force } => {
-                add_all(
-                    &mut m.dead,
-                    edge_load::assemble_line_load(x0, edges, *force),
-                );
-            }
-            Load::Traction {
-                quads: elems,
-                traction,
-            } => {
-                let f = surface_load::assemble_dead_traction(*traction, quads, elems, x0);
-                add_all(&mut m.dead, f);
             }
             Load::Pressure {
                 quads: elems,
@@ -94,16 +80,7 @@ pub fn build_model(scene: &ShellScene) -> Result<ShellModel> {
                     });
                 }
             }
-            Load::Pressure {
-                quads: elems,
-                pressure,
-                follower: false,
-            } => {
-                // A dead pressure is the follower pressure of the reference
-                // configuration (its normal and area), held fixed.
-                let f = surface_load::assemble_follower(*pressure, quads, elems, x0);
-                add_all(&mut m.dead, f);
-            }
+            _ => unreachable!("dead_pattern covers every dead load"),
         }
     }
     if let Some(ct) = &scene.contact {
@@ -131,6 +108,50 @@ pub fn build_model(scene: &ShellScene) -> Result<ShellModel> {
         check_rigid_modes(scene)?;
     }
     Ok(m)
+}
+
+/// The nodal force vector (full dofs) of a dead load: a force per node,
+/// a line force lumped on its edges, a traction or a dead pressure. None
+/// for the follower loads (couples, follower pressures), which the model
+/// applies at the current state.
+pub fn dead_pattern(scene: &ShellScene, load: &Load) -> Option<Vec<f64>> {
+    let x0 = &scene.mesh.nodes;
+    let quads = &scene.mesh.quads;
+    let mut out = vec![0.0; PER_NODE * x0.len()];
+    let mut add = |node: usize, f: Vec3| {
+        for (k, c) in Component::DISPLACEMENT.into_iter().enumerate() {
+            out[Dof::new(node, c).index()] += f[k];
+        }
+    };
+    let forces: Vec<(usize, Vec3)> = match load {
+        Load::Nodal { nodes, force } => nodes.iter().map(|&n| (n, *force)).collect(),
+        Load::Line { edges, force } => edge_load::assemble_line_load(x0, edges, *force)
+            .into_iter()
+            .enumerate()
+            .collect(),
+        Load::Traction {
+            quads: elems,
+            traction,
+        } => surface_load::assemble_dead_traction(*traction, quads, elems, x0)
+            .into_iter()
+            .enumerate()
+            .collect(),
+        // A dead pressure is the follower pressure of the reference
+        // configuration (its normal and area), held fixed.
+        Load::Pressure {
+            quads: elems,
+            pressure,
+            follower: false,
+        } => surface_load::assemble_follower(*pressure, quads, elems, x0)
+            .into_iter()
+            .enumerate()
+            .collect(),
+        Load::Moment { .. } | Load::Pressure { follower: true, .. } => return None,
+    };
+    for (n, f) in forces {
+        add(n, f);
+    }
+    Some(out)
 }
 
 /// |F|: the 2-norm of the dead load pattern on the free dofs (N), the scale

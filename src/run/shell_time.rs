@@ -2,8 +2,9 @@
 //! ([`crate::shell::time_path`]) and its files.
 //!
 //! - history.csv: t, lambda (the load ramp), the scene's probes, then
-//!   rn_total (Σ R_N of the friction nodes), ft_x, ft_y, ft_z (Σ R_T) and
-//!   max_slip (largest |v_s|);
+//!   rn_total (Σ R_N of the friction nodes), ft_x, ft_y, ft_z (Σ R_T),
+//!   max_slip (largest |v_s|) and slip_area (the tributary area of the
+//!   nodes that slip, |v_s| > 10 ω Vc: the slip zone);
 //! - friction.csv: per friction node at t_end (or the stop): gap, R_N,
 //!   R_T, v_s, |v_s| and `slip` (|v_s| > 10 omega Vc) or `stick`;
 //! - summary.json: counters, the stop and the last row;
@@ -78,11 +79,26 @@ pub fn problem(scene: &ShellScene) -> Result<FrictionDae> {
     // surface velocity only.
     let motions: Vec<Motion> = scene.obstacles.iter().map(|o| o.motion).collect();
     model.set_motions(vec![Motion::Fixed; motions.len()]);
+    let extra_loads = fr
+        .load_ramps
+        .iter()
+        .map(|&(i, ramp)| {
+            let full = super::build::dead_pattern(scene, &scene.loads[i]).unwrap_or_default();
+            let mut free = vec![0.0; model.ndof()];
+            for (f, v) in model.free.iter().zip(&full) {
+                if let Some(k) = f {
+                    free[*k] = *v;
+                }
+            }
+            (ramp, free)
+        })
+        .collect();
     let laws = TimeLaws {
         law: fr.law,
         load: fr.load,
         motion: fr.motion,
         motions,
+        extra_loads,
     };
     Ok(FrictionDae::new(model, laws, scene.solver.order))
 }
@@ -143,7 +159,7 @@ fn solve_with(scene: &ShellScene, progress: bool) -> Result<(TimeRun, FrictionDa
 
 /// Columns of history.csv after t and lambda: the probes, then the
 /// friction totals.
-fn row(dae: &FrictionDae, scene: &ShellScene, s: &TimeSample) -> Result<Vec<f64>> {
+fn row(dae: &FrictionDae, scene: &ShellScene, areas: &[f64], s: &TimeSample) -> Result<Vec<f64>> {
     let state = State {
         full: &s.full,
         lambda: s.lambda,
@@ -157,14 +173,27 @@ fn row(dae: &FrictionDae, scene: &ShellScene, s: &TimeSample) -> Result<Vec<f64>
         .iter()
         .fold(nalgebra::Vector3::zeros(), |a, f| a + f.force);
     let slip = s.friction.iter().map(|f| f.slip.norm()).fold(0.0, f64::max);
-    v.extend([rn, ft[0], ft[1], ft[2], slip]);
+    let law = dae.laws.law;
+    let slip_area: f64 = s
+        .friction
+        .iter()
+        .filter(|f| f.slip.norm() > slip_threshold(&law))
+        .map(|f| areas[f.node])
+        .sum();
+    v.extend([rn, ft[0], ft[1], ft[2], slip, slip_area]);
     Ok(v)
+}
+
+/// The slip speed above which a friction node slips (friction.csv, the
+/// stick/slip map, slip_area): 10 ω Vc, ten times the regularization's.
+pub fn slip_threshold(law: &crate::contact::FrictionLaw) -> f64 {
+    10.0 * law.omega * law.vc
 }
 
 fn header(scene: &ShellScene) -> Vec<String> {
     let mut h = vec!["t".to_string(), "lambda".to_string()];
     h.extend(scene.probes.iter().map(|p| p.name.clone()));
-    h.extend(["rn_total", "ft_x", "ft_y", "ft_z", "max_slip"].map(String::from));
+    h.extend(["rn_total", "ft_x", "ft_y", "ft_z", "max_slip", "slip_area"].map(String::from));
     h
 }
 
@@ -186,10 +215,11 @@ pub fn run_with(scene: &ShellScene, out_dir: Option<&Path>, progress: bool) -> R
     let (run, dae) = solve_with(scene, progress)?;
     let wall_s = start.elapsed().as_secs_f64();
     let head = header(scene);
+    let areas = scene.mesh.node_areas();
     let rows: Vec<Vec<f64>> = run
         .samples
         .iter()
-        .map(|s| row(&dae, scene, s))
+        .map(|s| row(&dae, scene, &areas, s))
         .collect::<Result<_>>()?;
     if let Some(r) = rows.iter().flatten().find(|v| !v.is_finite()) {
         return Err(Error::NonFinite {
@@ -266,7 +296,7 @@ pub fn run_with(scene: &ShellScene, out_dir: Option<&Path>, progress: bool) -> R
         .map_err(|e| write_err(&file)(e.to_string()))?;
         for f in &last.friction {
             let speed = f.slip.norm();
-            let state = if speed > 10.0 * law.omega * law.vc {
+            let state = if speed > slip_threshold(&law) {
                 "slip"
             } else {
                 "stick"
@@ -294,7 +324,7 @@ pub fn run_with(scene: &ShellScene, out_dir: Option<&Path>, progress: bool) -> R
                 scene.thickness,
                 &last.full,
                 &last.friction,
-                10.0 * law.omega * law.vc,
+                slip_threshold(&law),
             );
             along_strip::write_csv(&dir.join("along.csv"), &along)?;
             along_strip::plot(&dir.join("along.svg"), &along)?;
@@ -325,7 +355,7 @@ fn write_fields(path: &Path, scene: &ShellScene, dae: &FrictionDae, s: &TimeSamp
         rn[f.node] += f.rn;
         force[f.node] += f.force;
         slip[f.node] = f.slip;
-        stick[f.node] = if f.slip.norm() > 10.0 * law.omega * law.vc {
+        stick[f.node] = if f.slip.norm() > slip_threshold(&law) {
             0.0
         } else {
             1.0

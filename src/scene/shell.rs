@@ -125,6 +125,7 @@ struct RawLoad {
     traction: Option<[f64; 3]>,
     pressure: Option<f64>,
     follower: Option<bool>,
+    ramp: Option<[f64; 2]>,
 }
 
 #[derive(Deserialize)]
@@ -267,6 +268,9 @@ pub struct FrictionSpec {
     pub t_end: f64,
     pub load: Ramp,
     pub motion: Ramp,
+    /// Loads with their own time function (`load.ramp`): (index into
+    /// `ShellScene::loads`, ramp); the others follow `load`.
+    pub load_ramps: Vec<(usize, Ramp)>,
     /// Rows of history.csv every `output_step` seconds.
     pub output_step: f64,
     /// `solver.time_step`: "implicit" (RODAS4 steps, shell::implicit_step),
@@ -601,8 +605,15 @@ pub fn load(path: &Path) -> Result<ShellScene> {
             &obstacles,
             contact.is_some(),
             loaded,
+            &raw.load,
         )?),
         None => {
+            if let Some(i) = raw.load.iter().position(|l| l.ramp.is_some()) {
+                return Err(c.fail(
+                    &format!("load[{i}].ramp"),
+                    "applies to scenes in time (with [friction]); remove it",
+                ));
+            }
             if raw.solver.time_step.is_some() {
                 return Err(c.fail(
                     "solver.time_step",
@@ -1089,6 +1100,12 @@ fn loads(ctx: &Ctx, raw: &[RawLoad]) -> Result<Vec<Load>> {
     let mut out = vec![];
     for (i, l) in raw.iter().enumerate() {
         let key = format!("load[{i}]");
+        if l.ramp.is_some() && (l.moment.is_some() || l.follower == Some(true)) {
+            return Err(c.fail(
+                &format!("{key}.ramp"),
+                "only a dead load (force, line_force, traction, dead pressure) takes its own ramp",
+            ));
+        }
         let kinds = [
             l.force.is_some(),
             l.moment.is_some(),
@@ -1316,6 +1333,7 @@ fn friction(
     obstacles: &[ObstacleSpec],
     contact: bool,
     loaded: bool,
+    loads: &[RawLoad],
 ) -> Result<FrictionSpec> {
     if !contact {
         return Err(c.fail(
@@ -1341,19 +1359,24 @@ fn friction(
         let Some([start, end]) = r else {
             return Ok(Ramp::FULL);
         };
-        let key = format!("friction.{key}");
-        c.non_negative(&key, start)?;
-        c.finite(&key, end)?;
+        c.non_negative(key, start)?;
+        c.finite(key, end)?;
         if !(end >= start && start < t_end) {
             return Err(c.fail(
-                &key,
+                key,
                 format!("[start, end] = [{start}, {end}] must have start <= end and start < friction.t_end = {t_end}"),
             ));
         }
         Ok(Ramp { start, end })
     };
-    let load = ramp("load_ramp", fr.load_ramp)?;
-    let motion = ramp("motion_ramp", fr.motion_ramp)?;
+    let load = ramp("friction.load_ramp", fr.load_ramp)?;
+    let motion = ramp("friction.motion_ramp", fr.motion_ramp)?;
+    let mut load_ramps = vec![];
+    for (i, l) in loads.iter().enumerate() {
+        if let Some(r) = l.ramp {
+            load_ramps.push((i, ramp(&format!("load[{i}].ramp"), Some(r))?));
+        }
+    }
     let moving = obstacles.iter().any(|o| match o.motion {
         Motion::Fixed => false,
         Motion::Translate { velocity } => velocity.norm() > 0.0,
@@ -1399,7 +1422,8 @@ fn friction(
             ));
         }
     };
-    if !(moving || loaded && load.varies()) {
+    let own_varies = load_ramps.iter().any(|(_, r)| r.varies());
+    if !(moving || loaded && load.varies() || own_varies) {
         return Err(c.fail(
             "friction",
             "nothing moves in time: give an [[obstacle]] a `translate` or `rotate` motion, or [[load]]s / non-zero [[fix]] values that vary in time (friction.load_ramp)",
@@ -1416,6 +1440,7 @@ fn friction(
         t_end,
         load,
         motion,
+        load_ramps,
         output_step,
         stepping,
     })

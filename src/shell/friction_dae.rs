@@ -6,11 +6,12 @@
 //! (an active contact pair; one obstacle per node, the nearest: run::build), w_i = (t_1·ẋ_i, t_2·ẋ_i),
 //! its velocity in the obstacle's tangent frame ([`super::friction_pair`]):
 //!
-//!   E(U, w, t) = R(U, λ(t)) − Σ_i R_T,i(x_i, w_i, m(t)) = 0   (equilibrium)
+//!   E(U, w, t) = R(U, λ(t)) − Σ_j ρ_j(t) F_j − Σ_i R_T,i(x_i, w_i, m(t)) = 0   (equilibrium)
 //!   t_a(x_i)·ẋ_i − w_i,a = 0,  a = 1, 2                        (kinematics)
 //!
 //! with R the static residual of [`super::model`] (elements, loads, the normal
-//! law of eq. 3), λ(t) the load ramp and m(t) the motion ramp. The normal
+//! law of eq. 3), λ(t) the load ramp, m(t) the motion ramp and F_j the dead
+//! loads with their own ramps ρ_j (`load.ramp`). The normal
 //! position of a contact node is algebraic (the normal law), its tangential
 //! position differential; dR_T/dw is invertible wherever |R_N|_reg > 0
 //! (zeta > 0), so the DAE has index 1.
@@ -48,6 +49,21 @@ pub struct TimeLaws {
     pub motion: Ramp,
     /// The obstacles' motions at full ramp (m/s, rad/s).
     pub motions: Vec<Motion>,
+    /// Dead loads with their own time function: (ramp, force F on the free
+    /// dofs); E carries − ramp(t) F each.
+    pub extra_loads: Vec<(Ramp, Vec<f64>)>,
+}
+
+impl TimeLaws {
+    /// Every time where a load or motion factor has a kink.
+    pub fn kinks(&self) -> Vec<f64> {
+        let mut k = self.load.kinks();
+        k.extend(self.motion.kinks());
+        for (r, _) in &self.extra_loads {
+            k.extend(r.kinks());
+        }
+        k
+    }
 }
 
 /// The state at a step start: t, the free dofs and the tangential velocity
@@ -216,6 +232,12 @@ impl FrictionDae {
         // ∂E/∂t = R_λ λ'(t) − Σ ∂R_T/∂m m'(t) (the ramps are linear
         // between their kinks, which no step crosses).
         self.e_t = self.rl.iter().map(|r| r * lam1).collect();
+        for (ramp, f) in &self.laws.extra_loads {
+            let rate = ramp.rate(s.t);
+            for (e, fi) in self.e_t.iter_mut().zip(f) {
+                *e -= rate * fi;
+            }
+        }
         for (i, fp) in self.pairs.iter().enumerate() {
             let jac = fp.tape.jacobian(&[
                 0,
@@ -307,6 +329,12 @@ impl FrictionDae {
         let [lam0, _] = self.lambda(s.t);
         let [m0, _] = self.motion_factor(s.t);
         let mut r = self.model.residual(&s.u, lam0)?;
+        for (ramp, f) in &self.laws.extra_loads {
+            let v = ramp.value(s.t);
+            for (ri, fi) in r.iter_mut().zip(f) {
+                *ri -= v * fi;
+            }
+        }
         let full = self.model.expand(&s.u, lam0);
         let xs: Vec<Vector3<f64>> = self
             .pairs
@@ -332,7 +360,14 @@ impl FrictionDae {
             .iter()
             .map(|fp| fp.tape.output(friction_pair::RN, 0).abs())
             .sum();
-        norm(&self.rl) + rn
+        norm(&self.rl)
+            + self
+                .laws
+                .extra_loads
+                .iter()
+                .map(|(_, f)| norm(f))
+                .sum::<f64>()
+            + rn
     }
 
     /// The Newton direction at fixed tangential positions,
@@ -459,6 +494,15 @@ impl FrictionDae {
             };
             for i in 0..n {
                 rhs[i] = -self.rl[i] * lam[k] - sk[i];
+            }
+            if k == 1 {
+                // The own-ramp loads are linear within a step: order 1 only.
+                for (ramp, f) in &self.laws.extra_loads {
+                    let rate = ramp.rate(s.t);
+                    for (r, fi) in rhs.iter_mut().zip(f) {
+                        *r += rate * fi;
+                    }
+                }
             }
             for (i, fp) in self.pairs.iter_mut().enumerate() {
                 for c in 0..5 {

@@ -126,8 +126,7 @@ pub fn run(
     };
     let mut stats = TimeStats::default();
     let kinks: Vec<f64> = {
-        let mut k: Vec<f64> = dae.laws.load.kinks();
-        k.extend(dae.laws.motion.kinks());
+        let mut k: Vec<f64> = dae.laws.kinks();
         k.retain(|&t| t > 0.0);
         k.sort_by(f64::total_cmp);
         k
@@ -514,6 +513,11 @@ fn run_implicit(
                     )
                 }
                 Ok(_) => (0.25, "the error estimate is not finite".to_string()),
+                // A stage past the law's range (e.g. an unbounded slip
+                // speed): the stage's own error names the entry, not t.
+                Err(Error::NonFinite { what, .. }) => {
+                    (0.25, format!("a trial stage gave a non-finite {what}"))
+                }
                 Err(e) => (0.25, e.to_string()),
             };
             stats.rejected += 1;

@@ -1,8 +1,8 @@
 //! The regularization audit of a shell scene in time (a `[friction]`
 //! table; issue 10 item 5): how much omega, zeta (the friction law, eqs. 6
 //! and 11) and eta, K (the normal law, eq. 3) bend the scene's key probe
-//! (its first) and the total normal reaction (rn_total) at t_end, and what
-//! they cost.
+//! (its first), the total normal reaction (rn_total) and the slip zone
+//! (slip_area) at t_end, and what they cost.
 //!
 //! Each parameter is swept alone around the scene's values. For every run:
 //! the stop, both outputs at t_end, their deviation from the least
@@ -58,6 +58,10 @@ pub struct TimeAuditRow {
     pub key_deviation: f64,
     pub contact: f64,
     pub contact_deviation: f64,
+    /// The slip zone at t_end: the tributary area of the slipping friction
+    /// nodes (history.csv's slip_area, m²), and its deviation.
+    pub slip_area: f64,
+    pub slip_area_deviation: f64,
     /// max over the output times of |key − key_ref| / max |key_ref|.
     pub trajectory_deviation: f64,
     pub reference: String,
@@ -134,15 +138,16 @@ pub fn run_item(parameter: &str, value: f64, scene: &ShellScene) -> TimeAuditIte
     }
 }
 
-/// Columns of the key probe (the first) and rn_total in history.csv of a
-/// run in time (t, lambda, the probes, rn_total, ...).
-fn columns(scene: &ShellScene) -> (usize, usize) {
-    (2, 2 + scene.probes.len())
+/// Columns of the key probe (the first), rn_total and slip_area in
+/// history.csv of a run in time (t, lambda, the probes, rn_total, ft_x,
+/// ft_y, ft_z, max_slip, slip_area).
+fn columns(scene: &ShellScene) -> (usize, usize, usize) {
+    (2, 2 + scene.probes.len(), 7 + scene.probes.len())
 }
 
 /// The rows from the items' results, in sweep order.
 pub fn rows(scene: &ShellScene, items: &[TimeAuditItem]) -> Vec<TimeAuditRow> {
-    let (key_col, contact_col) = columns(scene);
+    let (key_col, contact_col, slip_col) = columns(scene);
     let t_end = scene.friction.as_ref().map_or(f64::NAN, |f| f.t_end);
     let mut rows = vec![];
     for name in ["omega", "zeta", "eta", "penalty"] {
@@ -174,9 +179,14 @@ pub fn rows(scene: &ShellScene, items: &[TimeAuditItem]) -> Vec<TimeAuditRow> {
             ),
             None => (None, "none (no run reached t_end)".to_string()),
         };
-        let (key_ref, contact_ref) = ref_record.map_or((f64::NAN, f64::NAN), |r| {
-            (at_end(r, key_col), at_end(r, contact_col))
-        });
+        let (key_ref, contact_ref, slip_ref) =
+            ref_record.map_or((f64::NAN, f64::NAN, f64::NAN), |r| {
+                (
+                    at_end(r, key_col),
+                    at_end(r, contact_col),
+                    at_end(r, slip_col),
+                )
+            });
         let scale = ref_record.map_or(f64::NAN, |r| {
             r.history
                 .iter()
@@ -187,7 +197,11 @@ pub fn rows(scene: &ShellScene, items: &[TimeAuditItem]) -> Vec<TimeAuditRow> {
         for it in group {
             let row = match &it.outcome {
                 Ok(r) => {
-                    let (key, contact) = (at_end(r, key_col), at_end(r, contact_col));
+                    let (key, contact, slip) = (
+                        at_end(r, key_col),
+                        at_end(r, contact_col),
+                        at_end(r, slip_col),
+                    );
                     let trajectory = ref_record.map_or(f64::NAN, |rr| {
                         r.history
                             .iter()
@@ -204,6 +218,8 @@ pub fn rows(scene: &ShellScene, items: &[TimeAuditItem]) -> Vec<TimeAuditRow> {
                         key_deviation: (key - key_ref).abs() / key_ref.abs(),
                         contact,
                         contact_deviation: (contact - contact_ref).abs() / contact_ref.abs(),
+                        slip_area: slip,
+                        slip_area_deviation: (slip - slip_ref).abs() / slip_ref.abs(),
                         trajectory_deviation: trajectory,
                         reference: ref_label.clone(),
                         steps: r.steps,
@@ -221,6 +237,8 @@ pub fn rows(scene: &ShellScene, items: &[TimeAuditItem]) -> Vec<TimeAuditRow> {
                     key_deviation: f64::NAN,
                     contact: f64::NAN,
                     contact_deviation: f64::NAN,
+                    slip_area: f64::NAN,
+                    slip_area_deviation: f64::NAN,
                     trajectory_deviation: f64::NAN,
                     reference: ref_label.clone(),
                     steps: 0,
@@ -258,12 +276,12 @@ pub fn markdown(scene: &ShellScene, rows: &[TimeAuditRow]) -> String {
             .map_or("none".into(), |z| format!("{z:e} N")),
     );
     s += &format!(
-        "| parameter | value | stop | {key}({t_end}) | deviation | rn_total({t_end}) (N) | deviation | trajectory deviation | steps | factorizations | max residual | wall (s) | reference |\n"
+        "| parameter | value | stop | {key}({t_end}) | deviation | rn_total({t_end}) (N) | deviation | slip_area({t_end}) (m²) | deviation | trajectory deviation | steps | factorizations | max residual | wall (s) | reference |\n"
     );
-    s += "|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+    s += "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
     for r in rows {
         s += &format!(
-            "| {} | {:e} | {} | {:.9e} | {:.2e} | {:.9e} | {:.2e} | {:.2e} | {} | {} | {:.1e} | {:.3} | {} |\n",
+            "| {} | {:e} | {} | {:.9e} | {:.2e} | {:.9e} | {:.2e} | {:.6e} | {:.2e} | {:.2e} | {} | {} | {:.1e} | {:.3} | {} |\n",
             r.parameter,
             r.value,
             r.stop,
@@ -271,6 +289,8 @@ pub fn markdown(scene: &ShellScene, rows: &[TimeAuditRow]) -> String {
             r.key_deviation,
             r.contact,
             r.contact_deviation,
+            r.slip_area,
+            r.slip_area_deviation,
             r.trajectory_deviation,
             r.steps,
             r.factorizations,
@@ -312,6 +332,8 @@ pub fn write(scene: &ShellScene, rows: &[TimeAuditRow], dir: &Path) -> Result<()
         "key_deviation",
         "rn_total",
         "rn_total_deviation",
+        "slip_area",
+        "slip_area_deviation",
         "trajectory_deviation",
         "steps",
         "factorizations",
@@ -329,6 +351,8 @@ pub fn write(scene: &ShellScene, rows: &[TimeAuditRow], dir: &Path) -> Result<()
             format!("{:e}", r.key_deviation),
             format!("{:e}", r.contact),
             format!("{:e}", r.contact_deviation),
+            format!("{:e}", r.slip_area),
+            format!("{:e}", r.slip_area_deviation),
             format!("{:e}", r.trajectory_deviation),
             r.steps.to_string(),
             r.factorizations.to_string(),

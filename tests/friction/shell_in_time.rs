@@ -229,6 +229,29 @@ fn capstan_tension_follows_euler_eytelwein() {
     assert!(slowest > 0.99 * 0.1, "{slowest}");
 }
 
+/// Issue 10 item 3c, the stop: the strip of
+/// scenes/verification/capstan-breakaway.toml breaks away from a roller that
+/// stands still when the pull T2(t) reaches T1 exp(f θ): the quasi-static
+/// solution ceases at t* = T1 exp(f θ) / T2max, and the run stops there
+/// with a diagnosis that names the time.
+#[test]
+fn a_strip_pulled_over_a_fixed_roller_stops_where_it_breaks_away() {
+    let sc = scene("capstan-breakaway");
+    let f = sc.friction.as_ref().expect("friction").law.f;
+    let closed = 20.0 * (f * std::f64::consts::PI).exp() / 150.0;
+    let stop = match shell_time::solve(&sc) {
+        Err(anm::Error::TimeSteps { at, what, .. }) => {
+            println!("stops at t = {at:.6} s: {what}");
+            at
+        }
+        Err(e) => panic!("an unexpected error: {e}"),
+        Ok((run, _)) => panic!("ran to {:?} without a stop", run.stop),
+    };
+    let rel = stop / closed - 1.0;
+    println!("breakaway: t = {stop:.6} s vs T1 exp(f θ) / T2max = {closed:.6} s ({rel:.1e})");
+    assert!(rel.abs() < 1e-3, "{stop} vs {closed}");
+}
+
 /// Issue 10 item 4: the cross-section outputs along the capstan's arc
 /// (run::along_strip) against the closed forms of a string slipping on a
 /// cylinder: the tension at angle φ from the held end is

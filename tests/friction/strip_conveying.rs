@@ -48,6 +48,11 @@ fn conveying_strip_reaches_the_euler_eytelwein_steady_state() {
         report.steps, report.factorizations
     );
     assert!(rel.abs() < 1e-2, "exit {exit} vs {closed}");
+    // The section force across the held edge is its support reaction (the
+    // element forces there against the residual at the fixed dofs).
+    let section = last[col("T_exit")];
+    println!("tension across the exit edge {section:.6} N, its reaction {exit:.6} N");
+    assert!((section - exit).abs() < 1e-6 * exit, "{section} vs {exit}");
     assert!(drift < 1e-4, "not steady: {drift}");
     for r in ["r1", "r3"] {
         let (a, b) = (

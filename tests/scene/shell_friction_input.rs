@@ -268,3 +268,73 @@ fn time_step_is_read_and_bad_values_are_named() {
     std::fs::write(&p, text).unwrap();
     expect_invalid(&p, "solver.time_step", "[friction]");
 }
+
+/// `load.ramp` (a load with its own time function, issue 10 item 3c): read
+/// with [friction]; refused without it, on a follower load, and with bad
+/// values, each naming the key.
+#[test]
+fn a_load_ramp_is_read_and_bad_ones_are_named() {
+    let p = scene(
+        "own-ramp.toml",
+        &[(
+            "force = [0.0, 0.0, -0.5]",
+            "force = [0.0, 0.0, -0.5]\nramp = [0.2, 0.4]",
+        )],
+    );
+    let s = load(&p).unwrap();
+    assert_eq!(
+        s.friction.expect("[friction]").load_ramps,
+        vec![(
+            0,
+            Ramp {
+                start: 0.2,
+                end: 0.4
+            }
+        )]
+    );
+    for (name, ramp, part) in [
+        (
+            "own-ramp-backward.toml",
+            "ramp = [0.4, 0.2]",
+            "start <= end",
+        ),
+        (
+            "own-ramp-late.toml",
+            "ramp = [3.0, 4.0]",
+            "start < friction.t_end",
+        ),
+        ("own-ramp-negative.toml", "ramp = [-1.0, 0.2]", ">= 0"),
+    ] {
+        let p = scene(
+            name,
+            &[(
+                "force = [0.0, 0.0, -0.5]",
+                &format!("force = [0.0, 0.0, -0.5]\n{ramp}"),
+            )],
+        );
+        expect_invalid(&p, "load[0].ramp", part);
+    }
+    let p = scene(
+        "own-ramp-moment.toml",
+        &[(
+            "force = [0.0, 0.0, -0.5]",
+            "moment = [0.0, 0.0, 0.5]\nramp = [0.0, 0.4]",
+        )],
+    );
+    expect_invalid(&p, "load[0].ramp", "only a dead load");
+    let text = std::fs::read_to_string(BASE).unwrap();
+    let start = text.find("[friction]").unwrap();
+    let end = text[start..]
+        .find("\n[[")
+        .or_else(|| text[start..].find("\n[solver]"))
+        .unwrap();
+    let without = format!("{}{}", &text[..start], &text[start + end + 1..]).replacen(
+        "force = [0.0, 0.0, -0.5]",
+        "force = [0.0, 0.0, -0.5]\nramp = [0.0, 0.4]",
+        1,
+    );
+    let d = std::env::temp_dir().join("anm-shell-friction-input");
+    let p = d.join("own-ramp-static.toml");
+    std::fs::write(&p, without).unwrap();
+    expect_invalid(&p, "load[0].ramp", "applies to scenes in time");
+}

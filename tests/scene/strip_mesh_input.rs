@@ -169,7 +169,7 @@ fn a_tension_probe_needs_a_cross_section() {
             "quantity = \"tension\"\ngroup = \"r1_arc\"",
         )],
     );
-    expect_invalid(&p, "probe[0]", "one node row of constant t");
+    expect_invalid(&p, "probe[1]", "one node row of constant t");
     let p = scene(
         "tension-on-point.toml",
         &[(
@@ -177,5 +177,5 @@ fn a_tension_probe_needs_a_cross_section() {
             "quantity = \"tension\"\npoint = [0.0, 2.6856406460551017, 0.8856406560551019]",
         )],
     );
-    expect_invalid(&p, "probe[0]", "one node row of constant t");
+    expect_invalid(&p, "probe[1]", "one node row of constant t");
 }
