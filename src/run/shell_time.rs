@@ -9,7 +9,8 @@
 //!   R_T, v_s, |v_s| and `slip` (|v_s| > 10 omega Vc) or `stick`;
 //! - summary.json: counters, the stop and the last row;
 //! - friction.vtu (ParaView): the last state's mid-surface with the
-//!   displacement, R_N, R_T, v_s, |v_s| and stick (1) / slip (0) per node,
+//!   displacement, R_N, the contact pressure (R_N over the node's
+//!   tributary area), R_T, v_s, |v_s| and stick (1) / slip (0) per node,
 //!   and the membrane stresses per element (along and across its η
 //!   direction, shear, principal min and max; run::section);
 //! - friction.svg: rn_total and ft_x, ft_y, ft_z, and max_slip against t;
@@ -362,6 +363,8 @@ fn write_fields(path: &Path, scene: &ShellScene, dae: &FrictionDae, s: &TimeSamp
         };
     }
     let speed = slip.iter().map(|v| v.norm()).collect();
+    let areas = scene.mesh.node_areas();
+    let pressure = rn.iter().zip(&areas).map(|(r, a)| r / a).collect();
     let stress: Vec<_> = (0..scene.mesh.quads.len())
         .map(|e| membrane_stress(&dae.model, e, &s.full, scene.thickness))
         .collect();
@@ -373,6 +376,7 @@ fn write_fields(path: &Path, scene: &ShellScene, dae: &FrictionDae, s: &TimeSamp
         &[
             PointData::Vector("displacement", displacement),
             PointData::Scalar("contact_reaction", rn),
+            PointData::Scalar("contact_pressure", pressure),
             PointData::Vector("friction_force", force),
             PointData::Vector("slip_velocity", slip),
             PointData::Scalar("slip_speed", speed),

@@ -162,17 +162,34 @@ fn combine(base: &[f64], k: &[Vec<f64>], coef: &[f64; STAGES]) -> Vec<f64> {
 /// Brings a step start back onto the equilibrium manifold: up to 3
 /// Newton iterations with the step's matrix M/(h γ) − J (linearized at
 /// the start), rhs [−E; 0], which relax the fast (stiff) components as the
-/// DAE would over h γ and leave the slow ones in place. Stops once the
+/// DAE would over h γ and leave the slow ones in place. With
+/// `relinearize = Some(h γ)`, up to 5 iterations re-linearized at the
+/// current state instead (the DAE is left prepared and factorized there,
+/// as the trial needs): the step loop's remedy when trials keep failing
+/// from a start the first settle left off the manifold. Stops once the
 /// relative residual is below `target` or stops falling; returns it.
-pub fn settle(dae: &mut FrictionDae, end: &mut TimeState, target: f64) -> Result<f64> {
+pub fn settle(
+    dae: &mut FrictionDae,
+    end: &mut TimeState,
+    target: f64,
+    relinearize: Option<f64>,
+) -> Result<f64> {
     let n = end.u.len();
     let np = dae.n_pairs();
     let scale = dae.force_scale().max(f64::MIN_POSITIVE);
     let mut r = dae.residual(end)?;
     let mut rel = crate::linalg::norm(&r) / scale;
-    for _ in 0..3 {
+    let iterations = if relinearize.is_some() { 5 } else { 3 };
+    for _ in 0..iterations {
         if rel <= target {
             break;
+        }
+        if let Some(hg) = relinearize {
+            // Newton proper, re-linearized at the current state (a node on
+            // the bend of the law, where its slip is steep in the force,
+            // stalls the iteration with the start's matrix).
+            dae.prepare(end)?;
+            dae.factor_implicit(hg, end.t)?;
         }
         let mut rhs = vec![0.0; n + 2 * np];
         for (b, e) in rhs.iter_mut().zip(&r) {

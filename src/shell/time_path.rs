@@ -424,7 +424,7 @@ fn run_implicit(
         let clipped = length < h;
         dae.prepare(&s)?;
         dae.factor_implicit(length * RODAS4.gamma, s.t)?;
-        let rel = implicit_step::settle(dae, &mut s, settle_tol)?;
+        let rel = implicit_step::settle(dae, &mut s, settle_tol, None)?;
         stats.max_residual = stats.max_residual.max(rel);
         if at_output {
             s.t = cfg.outputs[next_out];
@@ -478,6 +478,7 @@ fn run_implicit(
         } else {
             probe_wait = probe_wait.saturating_sub(1);
         }
+        let mut rejections = 0;
         let accepted: Trial = loop {
             // The error relative to what the test allows.
             let attempt = implicit_step::trial(dae, &s, length).map(|mut t| {
@@ -521,7 +522,17 @@ fn run_implicit(
                 Err(e) => (0.25, e.to_string()),
             };
             stats.rejected += 1;
+            rejections += 1;
             length *= factor;
+            if rejections == 3 {
+                // Trials keep failing from this start: settle it again with
+                // Newton proper (measured: ζ = 1e-4 N on the conveying strip
+                // collapsed at t = 2e-8 s with the start 20× off the
+                // settle's target).
+                let rel =
+                    implicit_step::settle(dae, &mut s, settle_tol, Some(length * RODAS4.gamma))?;
+                stats.max_residual = stats.max_residual.max(rel);
+            }
             if length < cfg.min_step {
                 return Err(Error::TimeSteps {
                     param: "t",

@@ -109,3 +109,23 @@ fn conveying_strip_reaches_the_euler_eytelwein_steady_state() {
         assert!(fastest < threshold, "{r}: {fastest}");
     }
 }
+
+/// Issue 13 item 4 on the conveying strip: ζ = 1e-4 N (a hundredth of the
+/// scene's) runs to t_end within 3× the steps of the scene's ζ, and the
+/// exit tension does not move (the audit's "answers stop moving").
+#[test]
+fn conveying_strip_runs_at_a_small_zeta() {
+    let base = coarse_conveying();
+    let mut small = coarse_conveying();
+    small.friction.as_mut().expect("friction").law.zeta = Some(1e-4);
+    let a = shell_time::run(&base, None).expect("runs at the scene's zeta");
+    let b = shell_time::run(&small, None).expect("runs at zeta = 1e-4 N");
+    let exit = |r: &shell_time::TimeReport| r.end["T_exit"];
+    let moved = (exit(&b) - exit(&a)).abs() / exit(&a);
+    println!(
+        "zeta 1e-2 N: {} steps, {} factorizations; zeta 1e-4 N: {} steps, {} factorizations; exit tension moves by {moved:.1e}",
+        a.steps, a.factorizations, b.steps, b.factorizations
+    );
+    assert!(b.steps <= 3 * a.steps, "{} vs {}", b.steps, a.steps);
+    assert!(moved < 1e-6, "{moved}");
+}
