@@ -413,6 +413,15 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
             if kind == Kind::Shell {
                 let sc = anm::scene::shell::load(&scene)?;
                 anm::run::shell::check_factorizes(&sc)?;
+                println!(
+                    "mesh {}: {} nodes, {} elements",
+                    sc.mesh.file.display(),
+                    sc.mesh.nodes.len(),
+                    sc.mesh.quads.len()
+                );
+                for note in &sc.mesh.notes {
+                    println!("  {note}");
+                }
             }
             println!("{}: valid `{}` scene", scene.display(), kind.name());
             Ok(ExitCode::SUCCESS)

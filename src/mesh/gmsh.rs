@@ -307,6 +307,7 @@ pub fn parse(path: &Path, text: &str) -> Result<Mesh> {
         edge_groups,
         surface_groups,
         grid: None,
+        notes: vec![],
     })
 }
 

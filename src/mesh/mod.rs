@@ -47,6 +47,9 @@ pub struct Mesh {
     pub surface_groups: BTreeMap<String, Vec<usize>>,
     /// The (s, t) layout of a built-in structured mesh; None for gmsh.
     pub grid: Option<Grid>,
+    /// What a built-in mesher worked out that the user may want to see
+    /// (`anm check` prints it): e.g. a strip's length and wrap angles.
+    pub notes: Vec<String>,
 }
 
 /// The node and element layout of a structured mesh (see

@@ -266,6 +266,16 @@ pub fn mesh(
         let normal = rot90(d);
         (Vec3::new(xi, p.x, p.y), Vec3::new(0.0, normal.x, normal.y))
     });
+    m.notes.push(format!(
+        "strip path {:.6} m long; wrap angles: {}",
+        path.length(),
+        names
+            .iter()
+            .zip(&path.wraps)
+            .map(|(n, w)| format!("{n} {:.6} deg", w.to_degrees()))
+            .collect::<Vec<_>>()
+            .join(", ")
+    ));
     let g = m.grid.expect("a structured mesh");
     let mut wrapped: Vec<usize> = arc_rows
         .iter()

@@ -94,6 +94,7 @@ pub fn grid(label: &str, nx: usize, ny: usize, f: impl Fn(usize, usize) -> (Vec3
         edge_groups,
         surface_groups,
         grid: Some(super::Grid { nx, ny }),
+        notes: vec![],
     }
 }
 

@@ -179,3 +179,26 @@ fn a_tension_probe_needs_a_cross_section() {
     );
     expect_invalid(&p, "probe[1]", "one node row of constant t");
 }
+
+/// `anm check` shows what the strip mesher worked out: the path's length
+/// and each roller's wrap angle.
+#[test]
+fn check_prints_the_strip_path() {
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_anm"))
+        .arg("check")
+        .arg(BASE)
+        .output()
+        .unwrap();
+    let out = String::from_utf8_lossy(&o.stdout);
+    println!("{out}");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    for part in [
+        "1413 nodes, 1248 elements",
+        "strip path 3.94",
+        "r1 30.0000",
+        "r2 90.0000",
+        "r3 60.0000",
+    ] {
+        assert!(out.contains(part), "`{out}` lacks `{part}`");
+    }
+}

@@ -54,6 +54,7 @@ fn patch() -> Mesh {
         edge_groups: BTreeMap::new(),
         surface_groups: BTreeMap::new(),
         grid: None,
+        notes: vec![],
     }
 }
 
