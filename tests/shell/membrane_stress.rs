@@ -1,0 +1,85 @@
+//! The membrane stresses of run::section (issue 10 item 4: the transverse
+//! stress that drives wrinkling) against Hooke's law on a uniform state: a
+//! flat plate stretched along x by the Green strain E11, held along y
+//! (E22 = 0) and free through the thickness (S33 = 0, the director
+//! stretched by E33 = −λ E11 / (λ + 2μ)). Then
+//!   S11 = E / (1 − ν²) E11,  S22 = ν E / (1 − ν²) E11,  S12 = 0,
+//! exactly, for the second Piola–Kirchhoff stress that the element
+//! reports. The built-in rectangle's element η axis (the strip's "along")
+//! is y and its ξ axis ("across") is x.
+
+use anm::fe::dof::index;
+use anm::run::build::build_model;
+use anm::run::section::membrane_stress;
+use anm::scene::shell::load;
+
+const SCENE: &str = r#"
+[scene]
+kind = "shell"
+
+[mesh]
+type = "rectangle"
+x = [0.0, 2.0]
+y = [0.0, 1.0]
+divisions = [4, 3]
+
+[material]
+young = 210e9
+poisson = 0.3
+
+[shell]
+thickness = 5e-4
+
+[[fix]]
+group = "s0"
+clamp = true
+
+[[load]]
+edge = "s1"
+line_force = [1.0, 0.0, 0.0]
+
+[solver]
+lambda_end = 1.0
+
+[output]
+lambda_step = 0.5
+"#;
+
+#[test]
+fn membrane_stresses_follow_hookes_law_in_plane_strain_along_y() {
+    let dir = std::env::temp_dir().join(format!("anm-membrane-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("plate.toml");
+    std::fs::write(&path, SCENE).unwrap();
+    let sc = load(&path).expect("scene loads");
+    let model = build_model(&sc).expect("model");
+    let (e, nu) = (210e9, 0.3);
+    let (lam, mu) = (
+        e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu)),
+        e / (2.0 * (1.0 + nu)),
+    );
+    let stretch = 1e-3;
+    // u_x = stretch · x: E11 = stretch + stretch² / 2; the director's
+    // length sqrt(1 + 2 E33) gives the thickness strain.
+    let e11 = stretch + 0.5 * stretch * stretch;
+    let e33 = -lam * e11 / (lam + 2.0 * mu);
+    let mut full = vec![0.0; anm::fe::dof::PER_NODE * sc.mesh.nodes.len()];
+    for (n, x) in sc.mesh.nodes.iter().enumerate() {
+        full[index(n, 0)] = stretch * x.x;
+        full[index(n, 5)] = (1.0 + 2.0 * e33).sqrt() - 1.0;
+    }
+    let s11 = e / (1.0 - nu * nu) * e11;
+    let s22 = nu * e / (1.0 - nu * nu) * e11;
+    let mut worst = 0.0f64;
+    for el in 0..sc.mesh.quads.len() {
+        let m = membrane_stress(&model, el, &full, sc.thickness);
+        for (got, want) in [(m.across, s11), (m.along, s22), (m.max, s11), (m.min, s22)] {
+            worst = worst.max((got - want).abs() / s11);
+        }
+        worst = worst.max(m.shear.abs() / s11);
+    }
+    println!(
+        "S11 = {s11:.6e} Pa, S22 = {s22:.6e} Pa: largest deviation {worst:.1e} (relative to S11)"
+    );
+    assert!(worst < 1e-9, "{worst}");
+}
