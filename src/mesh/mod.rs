@@ -71,6 +71,11 @@ impl Grid {
         j * self.nx + i
     }
 
+    /// The row j of a node.
+    pub fn row_index(&self, node: usize) -> usize {
+        node / (self.nx + 1)
+    }
+
     /// The nodes of row j (constant t), in increasing s.
     pub fn row(&self, j: usize) -> Vec<usize> {
         (0..=self.nx).map(|i| self.node(i, j)).collect()
@@ -78,8 +83,7 @@ impl Grid {
 
     /// The row j whose nodes are exactly `nodes` (sorted), if any.
     pub fn row_of(&self, nodes: &[usize]) -> Option<usize> {
-        let first = *nodes.first()?;
-        let j = first / (self.nx + 1);
+        let j = self.row_index(*nodes.first()?);
         (j <= self.ny && nodes == self.row(j).as_slice()).then_some(j)
     }
 
@@ -95,7 +99,7 @@ impl Grid {
             for i in 0..self.nx {
                 let e = self.element(i, je);
                 for (local, &node) in quads[e].iter().enumerate() {
-                    if node / stride == j {
+                    if self.row_index(node) == j {
                         let neighbour = (node as i64 + away * stride as i64) as usize;
                         side.push(CutTerm {
                             element: e,

@@ -75,12 +75,11 @@ pub fn rows(
     friction: &[NodeFriction],
     slip_threshold: f64,
 ) -> Vec<AlongRow> {
-    let row_of = |node: usize| node / (grid.nx + 1);
     let mut rn = vec![0.0; grid.ny + 1];
     let mut slip = vec![0.0f64; grid.ny + 1];
     let mut slipping = vec![0usize; grid.ny + 1];
     for f in friction {
-        let j = row_of(f.node);
+        let j = grid.row_index(f.node);
         rn[j] += f.rn;
         let v = f.slip.norm();
         slip[j] = slip[j].max(v);

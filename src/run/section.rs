@@ -16,7 +16,11 @@ use crate::shell::ShellModel;
 /// The tension carried across `cut` at the full state (force, positive
 /// when the two sides pull apart).
 pub fn tension(model: &ShellModel, cut: &Cut, full: &[f64]) -> f64 {
-    let x = model.positions(full);
+    // Current position of a node (only the cut's nodes and neighbours).
+    let x = |n: usize| {
+        let i = crate::fe::dof::index(n, 0);
+        model.x0[n] + Vec3::new(full[i], full[i + 1], full[i + 2])
+    };
     let mut total = 0.0;
     for side in &cut.sides {
         let mut element = usize::MAX;
@@ -27,7 +31,7 @@ pub fn tension(model: &ShellModel, cut: &Cut, full: &[f64]) -> f64 {
                 f = model.element_internal(element, full);
             }
             let force = Vec3::new(f[6 * t.local], f[6 * t.local + 1], f[6 * t.local + 2]);
-            let u = (x[t.neighbour] - x[t.node]).normalize();
+            let u = (x(t.neighbour) - x(t.node)).normalize();
             total -= force.dot(&u);
         }
     }

@@ -85,13 +85,7 @@ pub fn problem(scene: &ShellScene) -> Result<FrictionDae> {
         .iter()
         .map(|&(i, ramp)| {
             let full = super::build::dead_pattern(scene, &scene.loads[i]).unwrap_or_default();
-            let mut free = vec![0.0; model.ndof()];
-            for (f, v) in model.free.iter().zip(&full) {
-                if let Some(k) = f {
-                    free[*k] = *v;
-                }
-            }
-            (ramp, free)
+            (ramp, model.reduce(&full))
         })
         .collect();
     let laws = TimeLaws {

@@ -269,7 +269,8 @@ impl ShellModel {
             .collect()
     }
 
-    fn reduce(&self, full: &[f64]) -> Vec<f64> {
+    /// Full vector to free-dof vector (fixed dofs dropped).
+    pub fn reduce(&self, full: &[f64]) -> Vec<f64> {
         let mut out = vec![0.0; self.ndof];
         for (f, v) in self.free.iter().zip(full) {
             if let Some(i) = f {

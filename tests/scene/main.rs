@@ -3,6 +3,7 @@
 
 mod bad_input;
 mod docs;
+mod edited;
 mod fuzz;
 mod shell_bad_input;
 mod shell_friction_input;

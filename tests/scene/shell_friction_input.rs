@@ -4,6 +4,7 @@
 //! without friction, is allowed with a warning (the keys' documentation:
 //! tests/scene/docs.rs).
 
+use super::edited::{edited, expect_invalid};
 use anm::Error;
 use anm::contact::FrictionLaw;
 use anm::scene::shell::load;
@@ -12,32 +13,9 @@ use std::path::{Path, PathBuf};
 
 const BASE: &str = "tests/data/shell-friction.toml";
 
-/// The friction fixture with `edits` (old, new) applied.
+/// The base scene with `edits` (old, new) applied.
 fn scene(name: &str, edits: &[(&str, &str)]) -> PathBuf {
-    let mut text = std::fs::read_to_string(BASE).unwrap();
-    for (old, new) in edits {
-        assert!(text.contains(old), "edit `{old}` does not apply");
-        text = text.replacen(old, new, 1);
-    }
-    let d = std::env::temp_dir().join("anm-shell-friction-input");
-    std::fs::create_dir_all(&d).unwrap();
-    let p = d.join(name);
-    std::fs::write(&p, text).unwrap();
-    p
-}
-
-#[track_caller]
-fn expect_invalid(path: &Path, key: &str, part: &str) {
-    let e = match load(path) {
-        Ok(_) => panic!("{}: expected an error on {key}", path.display()),
-        Err(e) => e,
-    };
-    let msg = e.to_string();
-    println!("{msg}");
-    assert_eq!(e.kind(), "invalid_input", "{msg}");
-    for p in [&path.file_name().unwrap().to_string_lossy(), key, part] {
-        assert!(msg.contains(p), "message `{msg}` lacks `{p}`");
-    }
+    edited(BASE, "anm-shell-friction-input", name, edits)
 }
 
 #[test]

@@ -3,37 +3,15 @@
 //! references and probes on groups that are not cross-sections stop with
 //! errors naming the file and the key.
 
+use super::edited::{edited, expect_invalid};
 use anm::scene::shell::{Quantity, load};
 use std::path::{Path, PathBuf};
 
 const BASE: &str = "scenes/strip-conveying.toml";
 
-/// The conveying scene with `edits` (old, new) applied.
+/// The base scene with `edits` (old, new) applied.
 fn scene(name: &str, edits: &[(&str, &str)]) -> PathBuf {
-    let mut text = std::fs::read_to_string(BASE).unwrap();
-    for (old, new) in edits {
-        assert!(text.contains(old), "edit `{old}` does not apply");
-        text = text.replacen(old, new, 1);
-    }
-    let d = std::env::temp_dir().join("anm-strip-mesh-input");
-    std::fs::create_dir_all(&d).unwrap();
-    let p = d.join(name);
-    std::fs::write(&p, text).unwrap();
-    p
-}
-
-#[track_caller]
-fn expect_invalid(path: &Path, key: &str, part: &str) {
-    let e = match load(path) {
-        Ok(_) => panic!("{}: expected an error on {key}", path.display()),
-        Err(e) => e,
-    };
-    let msg = e.to_string();
-    println!("{msg}");
-    assert_eq!(e.kind(), "invalid_input", "{msg}");
-    for p in [&path.file_name().unwrap().to_string_lossy(), key, part] {
-        assert!(msg.contains(p), "message `{msg}` lacks `{p}`");
-    }
+    edited(BASE, "anm-strip-mesh-input", name, edits)
 }
 
 /// The wrap angles of the scene's rollers (30, 90, 60 degrees) from the
