@@ -47,6 +47,10 @@ enum Command {
         /// lambda of the base state (0: the initial state).
         #[arg(long, default_value_t = 0.0)]
         lambda: f64,
+        /// A scene with [friction]: the time (s) of the base state, reached
+        /// by the run in time; sticking friction nodes are tied there.
+        #[arg(long, conflicts_with = "lambda")]
+        time: Option<f64>,
         /// Number of modes.
         #[arg(long, default_value_t = 4)]
         modes: usize,
@@ -705,6 +709,7 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
         Command::Buckle {
             scene,
             lambda,
+            time,
             modes,
             locate,
             out,
@@ -725,7 +730,9 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
                 }
                 return Ok(ExitCode::SUCCESS);
             }
-            let report = anm::study::buckle::buckle(&sc, lambda, modes, out.as_deref())
+            use anm::study::buckle::Base;
+            let base = time.map_or(Base::Lambda(lambda), Base::Time);
+            let report = anm::study::buckle::buckle(&sc, base, modes, out.as_deref())
                 .with_context(|| format!("buckling analysis of {}", scene.display()))?;
             print!("{}", anm::study::buckle::table(&report));
             if let Some(d) = out {
@@ -774,6 +781,20 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
                         );
                         if let Some(n) = r.stop_node {
                             println!("  singular point at node {n}");
+                        }
+                        for e in &r.events {
+                            println!(
+                                "  critical point ({} tangent, {}): t = {:.6e} s, lambda = {:.6e} (between outputs {} and {}; negative pivots {} -> {}), {}",
+                                e.tangent,
+                                e.detected_by,
+                                e.t,
+                                e.lambda,
+                                e.bracket[0],
+                                e.bracket[1],
+                                e.negative_pivots[0],
+                                e.negative_pivots[1],
+                                e.mode.as_deref().unwrap_or("")
+                            );
                         }
                         return Ok(ExitCode::SUCCESS);
                     }

@@ -248,12 +248,16 @@ pub fn record_gap<'a>(
             centre,
             axis,
             radius,
+            crown,
         } => {
             let xc: [Var<'a>; 3] = std::array::from_fn(|i| x[i] - centre[i]);
             let along = dot(xc, axis);
             let y: [Var<'a>; 3] = std::array::from_fn(|i| xc[i] - along * axis[i]);
             let d = (y[0] * y[0] + y[1] * y[1] + y[2] * y[2]).sqrt();
-            (y.map(|yi| yi / d), d - *radius)
+            // The crown's gradient 2 κ s a (obstacle.rs).
+            let n: [Var<'a>; 3] =
+                std::array::from_fn(|i| y[i] / d + along * (2.0 * crown * axis[i]));
+            (n, d - *radius + along * along * *crown)
         }
     }
 }

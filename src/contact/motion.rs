@@ -70,10 +70,12 @@ impl Obstacle {
                 centre,
                 axis,
                 radius,
+                crown,
             } => Obstacle::Cylinder {
                 centre: centre + d,
                 axis: *axis,
                 radius: *radius,
+                crown: *crown,
             },
         }
     }

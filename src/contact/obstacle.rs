@@ -2,7 +2,15 @@
 //!
 //! - plane through p with unit normal n: h = (x − p)·n, n constant;
 //! - cylinder of centre c, unit axis a, radius r: with P = I − a aᵀ and
-//!   y = P (x − c), d = |y|, h = d − r, n = y / d, dn/dx = (P − n nᵀ) / d.
+//!   y = P (x − c), d = |y|, h = d − r, n = y / d, dn/dx = (P − n nᵀ) / d;
+//! - crowned cylinder (a roll whose radius falls parabolically from r at
+//!   the centre's section, the industrial roll crown): with s = a·(x − c)
+//!   the radius is r(s) = r − κ s², and the gap h = d − r(s) =
+//!   d − r + κ s². Its gradient n = y / d + 2 κ s a is the direction of
+//!   the reaction (R n is the derivative of the contact energy Φ(h(x))),
+//!   dn/dx = (P − n_c n_cᵀ) / d + 2 κ a aᵀ with n_c = y / d. h is the
+//!   distance to the surface to first order in the slope r' = −2 κ s:
+//!   |n| = √(1 + r'²), 1 + 2e-6 for a 0.5 mm crown over a 1 m face.
 //!
 //! n points from the obstacle toward the point; the reaction R of eq. (3)
 //! acts on the point as R n. The gap is written as a function of x only;
@@ -30,7 +38,10 @@ pub enum Obstacle {
     Cylinder {
         centre: Vec3,
         axis: Vec3,
+        /// At the centre's section (s = 0).
         radius: f64,
+        /// κ of r(s) = radius − κ s² (1/m); 0 for a straight cylinder.
+        crown: f64,
     },
 }
 
@@ -57,7 +68,37 @@ impl Obstacle {
             centre,
             axis: a,
             radius,
+            crown: 0.0,
         })
+    }
+
+    /// A cylinder whose radius falls by `crown` from the centre's section
+    /// to the ends of a face of length `face` centred there:
+    /// r(s) = radius − crown (2 s / face)². None as for [`Self::cylinder`]
+    /// or if the crown is negative, not below the radius, or the face is
+    /// not positive.
+    pub fn crowned_cylinder(
+        centre: Vec3,
+        axis: Vec3,
+        radius: f64,
+        crown: f64,
+        face: f64,
+    ) -> Option<Self> {
+        let ok = crown >= 0.0 && crown < radius && face > 0.0 && face.is_finite();
+        match Self::cylinder(centre, axis, radius)? {
+            Obstacle::Cylinder {
+                centre,
+                axis,
+                radius,
+                ..
+            } if ok => Some(Obstacle::Cylinder {
+                centre,
+                axis,
+                radius,
+                crown: 4.0 * crown / (face * face),
+            }),
+            _ => None,
+        }
     }
 
     /// Gap and normal at x. None where the normal is undefined (a point on
@@ -73,6 +114,7 @@ impl Obstacle {
                 centre,
                 axis,
                 radius,
+                crown,
             } => {
                 let p = Matrix3::identity() - axis * axis.transpose();
                 let y = p * (x - centre);
@@ -80,11 +122,12 @@ impl Obstacle {
                 if d <= 1e-12 * radius {
                     return None;
                 }
-                let n = y / d;
+                let nc = y / d;
+                let s = axis.dot(&(x - centre));
                 Some(Gap {
-                    h: d - radius,
-                    n,
-                    dn: (p - n * n.transpose()) / d,
+                    h: d - radius + crown * s * s,
+                    n: nc + axis * (2.0 * crown * s),
+                    dn: (p - nc * nc.transpose()) / d + axis * axis.transpose() * (2.0 * crown),
                 })
             }
         }
@@ -100,7 +143,10 @@ pub struct GapSeries {
     y: [Vec<f64>; 3],
     d2: Vec<f64>,
     d: Vec<f64>,
+    /// y / d (the straight cylinder's normal; the crown adds 2 κ s a).
     n: [Vec<f64>; 3],
+    /// s = a·(x − c) (crowned cylinder; zeros otherwise).
+    s: Vec<f64>,
     /// h_r.
     pub h: Vec<f64>,
 }
@@ -108,7 +154,8 @@ pub struct GapSeries {
 #[derive(Clone, Debug)]
 enum Kind {
     Plane(Vec3, Vec3),
-    Cylinder(Matrix3<f64>, Vec3),
+    /// P, c, a, κ.
+    Cylinder(Matrix3<f64>, Vec3, Vec3, f64),
 }
 
 impl GapSeries {
@@ -117,21 +164,34 @@ impl GapSeries {
         let g = obstacle.gap(x0)?;
         let kind = match obstacle {
             Obstacle::Plane { point, normal } => Kind::Plane(*point, *normal),
-            Obstacle::Cylinder { centre, axis, .. } => {
-                Kind::Cylinder(Matrix3::identity() - axis * axis.transpose(), *centre)
-            }
+            Obstacle::Cylinder {
+                centre,
+                axis,
+                crown,
+                ..
+            } => Kind::Cylinder(
+                Matrix3::identity() - axis * axis.transpose(),
+                *centre,
+                *axis,
+                *crown,
+            ),
         };
-        let y0 = match &kind {
-            Kind::Plane(p, _) => x0 - p,
-            Kind::Cylinder(pm, c) => pm * (x0 - c),
+        let (y0, s0) = match &kind {
+            Kind::Plane(p, _) => (x0 - p, 0.0),
+            Kind::Cylinder(pm, c, a, _) => (pm * (x0 - c), a.dot(&(x0 - c))),
         };
         let d = y0.norm();
+        let nc = match &kind {
+            Kind::Plane(_, nrm) => *nrm,
+            Kind::Cylinder(..) => y0 / d,
+        };
         Some(Self {
             obstacle_kind: kind,
             y: [vec![y0[0]], vec![y0[1]], vec![y0[2]]],
             d2: vec![d * d],
             d: vec![d],
-            n: [vec![g.n[0]], vec![g.n[1]], vec![g.n[2]]],
+            n: [vec![nc[0]], vec![nc[1]], vec![nc[2]]],
+            s: vec![s0],
             h: vec![g.h],
         })
     }
@@ -159,12 +219,16 @@ impl GapSeries {
                     for k in 0..3 {
                         self.n[k].push(0.0);
                     }
+                    self.s.push(0.0);
                     self.h.push(hp);
                 }
                 (hp, Vec3::zeros())
             }
-            Kind::Cylinder(pm, _) => {
+            Kind::Cylinder(pm, _, a, kappa) => {
                 self.push_y(&(pm * xp));
+                self.s.push(a.dot(xp));
+                // (κ s²)_p by the Cauchy product.
+                let crown_p = kappa * (0..=p).map(|r| self.s[r] * self.s[p - r]).sum::<f64>();
                 let d2p: f64 = (0..=p)
                     .map(|r| (0..3).map(|k| self.y[k][r] * self.y[k][p - r]).sum::<f64>())
                     .sum();
@@ -175,19 +239,22 @@ impl GapSeries {
                 for k in 0..3 {
                     np[k] = div_coeff(&self.y[k], &self.d, &self.n[k], p);
                 }
+                let full_np = np + a * (2.0 * kappa * self.s[p]);
+                let hp = dp + crown_p;
                 if keep {
                     for k in 0..3 {
                         self.n[k].push(np[k]);
                     }
-                    self.h.push(dp);
+                    self.h.push(hp);
                 } else {
                     for k in 0..3 {
                         self.y[k].pop();
                     }
                     self.d2.pop();
                     self.d.pop();
+                    self.s.pop();
                 }
-                (dp, np)
+                (hp, full_np)
             }
         }
     }
@@ -204,7 +271,11 @@ impl GapSeries {
 
     /// n_r.
     pub fn normal(&self, r: usize) -> Vec3 {
-        Vec3::new(self.n[0][r], self.n[1][r], self.n[2][r])
+        let nc = Vec3::new(self.n[0][r], self.n[1][r], self.n[2][r]);
+        match &self.obstacle_kind {
+            Kind::Cylinder(_, _, a, kappa) => nc + a * (2.0 * kappa * self.s[r]),
+            Kind::Plane(..) => nc,
+        }
     }
 }
 
@@ -218,7 +289,42 @@ mod tests {
             Obstacle::cylinder(Vec3::new(1.0, 0.0, 0.5001), Vec3::new(0.0, 2.0, 0.0), 0.5).unwrap();
         let g = cyl.gap(&Vec3::new(1.0, 0.3, 0.0)).unwrap();
         assert!((g.h - 1e-4).abs() < 1e-15 && (g.n - Vec3::new(0.0, 0.0, -1.0)).norm() < 1e-15);
-        // dn/dx against central differences.
+        gap_derivatives_and_series_agree(&cyl);
+    }
+
+    #[test]
+    fn crowned_cylinder_gap_normal_and_series_match_direct_evaluation() {
+        // Radius 0.5 at the centre's section y = 0, 0.45 at y = ±0.5.
+        let roll = Obstacle::crowned_cylinder(
+            Vec3::new(1.0, 0.0, 0.5001),
+            Vec3::new(0.0, 2.0, 0.0),
+            0.5,
+            0.05,
+            1.0,
+        )
+        .unwrap();
+        // Under the roll at y = 0.5: 0.5001 from the axis, radius 0.45 there.
+        let g = roll.gap(&Vec3::new(1.0, 0.5, 0.0)).unwrap();
+        assert!((g.h - 0.0501).abs() < 1e-15, "{}", g.h);
+        // n = gradient of h: −e_z + 2 κ s a with κ = 0.2, s = 0.5.
+        assert!((g.n - Vec3::new(0.0, 0.2, -1.0)).norm() < 1e-15);
+        // h by central differences of the gap itself.
+        let x = Vec3::new(1.3, 0.1, 0.2);
+        for j in 0..3 {
+            let mut e = Vec3::zeros();
+            e[j] = 1e-6;
+            let fd = (roll.gap(&(x + e)).unwrap().h - roll.gap(&(x - e)).unwrap().h) / 2e-6;
+            assert!((fd - roll.gap(&x).unwrap().n[j]).abs() < 1e-9);
+        }
+        gap_derivatives_and_series_agree(&roll);
+        assert!(Obstacle::crowned_cylinder(Vec3::zeros(), Vec3::x(), 0.5, 0.6, 1.0).is_none());
+        assert!(Obstacle::crowned_cylinder(Vec3::zeros(), Vec3::x(), 0.5, -0.1, 1.0).is_none());
+        assert!(Obstacle::crowned_cylinder(Vec3::zeros(), Vec3::x(), 0.5, 0.1, 0.0).is_none());
+    }
+
+    /// dn/dx against central differences of n, and the gap's series along a
+    /// quadratic x(a) against the gap evaluated at x(a).
+    fn gap_derivatives_and_series_agree(cyl: &Obstacle) {
         let x = Vec3::new(1.3, 0.1, 0.2);
         let g = cyl.gap(&x).unwrap();
         for j in 0..3 {
@@ -229,7 +335,7 @@ mod tests {
         }
         // Series along x(a) = x0 + x1 a + x2 a^2.
         let xs = [x, Vec3::new(0.3, -0.2, 0.5), Vec3::new(-0.1, 0.4, 0.2)];
-        let mut s = GapSeries::start(&cyl, &xs[0]).unwrap();
+        let mut s = GapSeries::start(cyl, &xs[0]).unwrap();
         for p in 1..=20 {
             let xp = if p < 3 { xs[p] } else { Vec3::zeros() };
             let (hs, ns) = s.clone().starred();

@@ -942,6 +942,7 @@ fn finish_files(rec: &mut Recorder, model: &ShellModel, full: &[f64], lambda: f6
                 centre,
                 axis,
                 radius,
+                ..
             } => cylinder_surface(centre, axis, *radius, 1.5 * size.min(4.0 * radius), 96),
             Obstacle::Plane { point, normal } => {
                 cylinder_surface(point, normal, 0.5 * size, 0.0, 4)

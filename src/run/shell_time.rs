@@ -23,11 +23,13 @@ use super::probe::{self, State};
 use super::section::{MembraneStress, membrane_stress};
 use crate::contact::Motion;
 use crate::error::{Error, Result};
+use crate::output::mode;
 use crate::output::plot::{Curve, Panel, draw};
 use crate::output::vtk::{PointData, write_vtu_cells};
 use crate::scene::shell::ShellScene;
 use crate::series::ContinuationProblem;
 use crate::shell::friction_dae::{FrictionDae, TimeLaws};
+use crate::shell::stability::{self, TimeEvent};
 use crate::shell::time_path::{self, TimeConfig, TimeRun, TimeSample, TimeStop};
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -64,6 +66,8 @@ pub struct TimeReport {
     pub header: Vec<String>,
     #[serde(skip)]
     pub history: Vec<Vec<f64>>,
+    /// Critical points between output times (`friction.stability`).
+    pub events: Vec<TimeEvent>,
 }
 
 /// The model and laws of a friction scene, ready to integrate.
@@ -199,6 +203,63 @@ fn write_err(file: &Path) -> impl Fn(String) -> Error + '_ {
     }
 }
 
+/// events.csv and one mode_K.vtu per critical point (named in `events`).
+fn write_events(
+    dir: &Path,
+    dae: &FrictionDae,
+    quads: &[[usize; 4]],
+    events: &mut [TimeEvent],
+) -> Result<()> {
+    let file = dir.join("events.csv");
+    let mut w = csv::Writer::from_path(&file).map_err(|e| write_err(&file)(e.to_string()))?;
+    w.write_record([
+        "tangent",
+        "detected_by",
+        "t",
+        "lambda",
+        "t_before",
+        "t_after",
+        "negative_pivots_before",
+        "negative_pivots_after",
+        "kappa_before",
+        "kappa_after",
+        "wavelength",
+        "half_waves",
+        "direction",
+        "mode",
+    ])
+    .map_err(|e| write_err(&file)(e.to_string()))?;
+    for (k, e) in events.iter_mut().enumerate() {
+        let name = format!("mode_{}.vtu", k + 1);
+        mode::write(
+            &dir.join(&name),
+            &dae.model.x0,
+            quads,
+            &dae.model.expand(&e.vector, 0.0),
+        )?;
+        let opt = |v: Option<f64>| v.map_or(String::new(), |v| format!("{v:.9e}"));
+        w.write_record([
+            e.tangent.to_string(),
+            e.detected_by.to_string(),
+            format!("{:.12e}", e.t),
+            format!("{:.12e}", e.lambda),
+            format!("{:.12e}", e.bracket[0]),
+            format!("{:.12e}", e.bracket[1]),
+            e.negative_pivots[0].to_string(),
+            e.negative_pivots[1].to_string(),
+            format!("{:.9e}", e.kappa[0]),
+            format!("{:.9e}", e.kappa[1]),
+            opt(e.wavelength),
+            opt(e.half_waves),
+            e.wave_direction.clone().unwrap_or_default(),
+            name.clone(),
+        ])
+        .map_err(|e| write_err(&file)(e.to_string()))?;
+        e.mode = Some(name);
+    }
+    w.flush().map_err(|e| write_err(&file)(e.to_string()))
+}
+
 /// Runs a friction scene in time; writes its files into `out_dir`.
 pub fn run(scene: &ShellScene, out_dir: Option<&Path>) -> Result<TimeReport> {
     run_with(scene, out_dir, false)
@@ -207,15 +268,54 @@ pub fn run(scene: &ShellScene, out_dir: Option<&Path>) -> Result<TimeReport> {
 /// [`run`] with a progress bar on stderr.
 pub fn run_with(scene: &ShellScene, out_dir: Option<&Path>, progress: bool) -> Result<TimeReport> {
     let start = Instant::now();
-    let (run, dae) = solve_with(scene, progress)?;
-    let wall_s = start.elapsed().as_secs_f64();
-    let head = header(scene);
+    let (run, mut dae) = solve_with(scene, progress)?;
+    let mut head = header(scene);
     let areas = scene.mesh.node_areas();
-    let rows: Vec<Vec<f64>> = run
+    let mut rows: Vec<Vec<f64>> = run
         .samples
         .iter()
         .map(|s| row(&dae, scene, &areas, s))
         .collect::<Result<_>>()?;
+    let monitored = scene.friction.as_ref().is_some_and(|f| f.stability);
+    let stable = if monitored {
+        let law = dae.laws.law;
+        stability::monitor(&mut dae.model, &run.samples, &law, scene.solver.linear)?
+    } else {
+        vec![]
+    };
+    if monitored {
+        // −1: a non-symmetric tied tangent (follower loads) has no inertia.
+        head.extend(
+            [
+                "negative_pivots",
+                "lowest_eigenvalue",
+                "negative_pivots_tied",
+                "lowest_eigenvalue_tied",
+                "sticking_nodes",
+            ]
+            .map(String::from),
+        );
+        let count = |n: Option<usize>| n.map_or(-1.0, |n| n as f64);
+        for (r, st) in rows.iter_mut().zip(&stable) {
+            r.extend([
+                count(st.free.negative_pivots),
+                st.free.kappa,
+                count(st.tied.negative_pivots),
+                st.tied.kappa,
+                st.sticking as f64,
+            ]);
+        }
+    }
+    let mut events = stability::events(&stable);
+    for e in &mut events {
+        let full = dae.model.expand(&e.vector, 0.0);
+        if let Some(w) = mode::wavelength(&dae.model.x0, &full) {
+            e.wavelength = Some(w.wavelength);
+            e.half_waves = Some(w.half_waves);
+            e.wave_direction = Some(w.direction.to_string());
+        }
+    }
+    let wall_s = start.elapsed().as_secs_f64();
     if let Some(r) = rows.iter().flatten().find(|v| !v.is_finite()) {
         return Err(Error::NonFinite {
             step: run.stats.steps,
@@ -229,7 +329,7 @@ pub fn run_with(scene: &ShellScene, out_dir: Option<&Path>, progress: bool) -> R
         TimeStop::End => ("end", last.t, None),
         TimeStop::Singularity { t, node } => ("singularity", t, Some(node + 1)),
     };
-    let report = TimeReport {
+    let mut report = TimeReport {
         scene: scene.file.display().to_string(),
         dofs: dae.model.ndof(),
         friction_nodes: last.friction.len(),
@@ -256,6 +356,7 @@ pub fn run_with(scene: &ShellScene, out_dir: Option<&Path>, progress: bool) -> R
             .collect(),
         header: head.clone(),
         history: rows.clone(),
+        events: events.clone(),
     };
     if let Some(dir) = out_dir {
         std::fs::create_dir_all(dir).map_err(|source| Error::Io {
@@ -323,6 +424,9 @@ pub fn run_with(scene: &ShellScene, out_dir: Option<&Path>, progress: bool) -> R
             );
             along_strip::write_csv(&dir.join("along.csv"), &along)?;
             along_strip::plot(&dir.join("along.svg"), &along)?;
+        }
+        if monitored {
+            write_events(dir, &dae, &scene.mesh.quads, &mut report.events)?;
         }
         let file = dir.join("summary.json");
         let text =

@@ -137,6 +137,8 @@ struct RawObstacle {
     centre: Option<[f64; 3]>,
     axis: Option<[f64; 3]>,
     radius: Option<f64>,
+    crown: Option<f64>,
+    face: Option<f64>,
     point: Option<[f64; 3]>,
     normal: Option<[f64; 3]>,
     motion: Option<RawMotion>,
@@ -175,6 +177,7 @@ struct RawFriction {
     load_ramp: Option<[f64; 2]>,
     motion_ramp: Option<[f64; 2]>,
     output_step: Option<f64>,
+    stability: Option<bool>,
 }
 
 #[derive(Deserialize)]
@@ -276,6 +279,10 @@ pub struct FrictionSpec {
     /// `solver.time_step`: "implicit" (RODAS4 steps, shell::implicit_step),
     /// "explicit" (the Taylor series in t) or "auto" (per step).
     pub stepping: Stepping,
+    /// `friction.stability`: the tied tangent's inertia and lowest
+    /// eigenvalue at every output time, critical points between them
+    /// (shell::stability).
+    pub stability: bool,
 }
 
 /// What a probe measures.
@@ -937,6 +944,7 @@ fn strip(c: &Checker, m: &RawMesh, obstacles: &[ObstacleSpec]) -> Result<Mesh> {
             centre,
             axis,
             radius,
+            crown,
         } = ob.shape
         else {
             return Err(c.fail(&key, format!("`{name}` is not a cylinder")));
@@ -956,10 +964,14 @@ fn strip(c: &Checker, m: &RawMesh, obstacles: &[ObstacleSpec]) -> Result<Mesh> {
                 format!("`{turn}`: expected `cw` or `ccw`"),
             )
         })?;
+        // A crowned roll: the path runs at the radius of the strip's
+        // middle section; the rest of the width starts off the roll by
+        // the crown's fall from there.
+        let mid = 0.5 * (width[0] + width[1]) - centre.x;
         rollers.push(strip_path::Roller {
             name: name.clone(),
             centre: [centre.y, centre.z],
-            radius,
+            radius: radius - crown * mid * mid,
             turn,
         });
     }
@@ -1249,13 +1261,38 @@ fn obstacles(c: &Checker, raw: &[RawObstacle]) -> Result<Vec<ObstacleSpec>> {
                     c.fail(&key("radius"), "missing: required by a `cylinder` obstacle")
                 })?;
                 c.positive(&key("radius"), r)?;
-                Obstacle::cylinder(centre, axis, r)
+                let crown = match (o.crown, o.face) {
+                    (None, None) => 0.0,
+                    (Some(crown), Some(face)) => {
+                        c.non_negative(&key("crown"), crown)?;
+                        if crown >= r {
+                            return Err(c.fail(
+                                &key("crown"),
+                                format!("must be below the radius {r}, got {crown}"),
+                            ));
+                        }
+                        c.positive(&key("face"), face)?;
+                        crown
+                    }
+                    (Some(_), None) => {
+                        return Err(c.fail(
+                            &key("face"),
+                            "missing: a crown is the radius drop over the face length `face`",
+                        ));
+                    }
+                    (None, Some(_)) => {
+                        return Err(c.fail(&key("face"), "given without `crown`; remove it"));
+                    }
+                };
+                Obstacle::crowned_cylinder(centre, axis, r, crown, o.face.unwrap_or(1.0))
                     .ok_or_else(|| c.fail(&key("axis"), "must be a non-zero vector"))?
             }
             "plane" => {
                 not(o.centre.is_some(), "centre")?;
                 not(o.axis.is_some(), "axis")?;
                 not(o.radius.is_some(), "radius")?;
+                not(o.crown.is_some(), "crown")?;
+                not(o.face.is_some(), "face")?;
                 let p = need(o.point, "point")?;
                 let n = need(o.normal, "normal")?;
                 Obstacle::plane(p, n)
@@ -1443,6 +1480,7 @@ fn friction(
         load_ramps,
         output_step,
         stepping,
+        stability: fr.stability.unwrap_or(false),
     })
 }
 

@@ -13,6 +13,7 @@ pub mod material;
 pub mod model;
 pub mod ramp;
 pub mod series;
+pub mod stability;
 pub mod time_path;
 
 pub use element::ShellElement;

@@ -332,6 +332,55 @@ impl ShellModel {
         )
     }
 
+    /// Adds a 3 × 3 block on the translations of `node` to a matrix on the
+    /// free unknowns (the entries of held translations are dropped).
+    pub fn add_node_block(&self, k: &mut SparseMatrix, node: usize, block: &[[f64; 3]; 3]) {
+        for i in 0..3 {
+            for j in 0..3 {
+                if let (Some(a), Some(b)) = (self.free[dof(node, i)], self.free[dof(node, j)]) {
+                    k.add(a, b, block[i][j]);
+                }
+            }
+        }
+    }
+
+    /// The contact part of the tangent alone (the pairs active at u; their
+    /// law's stiffness and the normal's turning), on the free unknowns:
+    /// what linearized buckling holds fixed at the base state.
+    pub fn contact_tangent(&mut self, u: &[f64], lambda: f64) -> Result<SparseMatrix> {
+        let full = self.expand(u, lambda);
+        self.update_active(&full, lambda);
+        let obstacles = self.obstacles_at(lambda);
+        let mut k = SparseMatrix::new(self.ndof);
+        for &ip in &self.active {
+            let (node, kc) = self.contact_block(ip, &full, &obstacles, lambda)?;
+            self.add_node_block(&mut k, node, &kc);
+        }
+        Ok(k)
+    }
+
+    /// The node of pair `ip` and its 3 × 3 tangent block
+    /// −(R'(h) n nᵀ + R(h) dn/dx) (eq. 3 differentiated).
+    fn contact_block(
+        &self,
+        ip: usize,
+        full: &[f64],
+        obstacles: &[Obstacle],
+        lambda: f64,
+    ) -> Result<(usize, [[f64; 3]; 3])> {
+        let pair = &self.pairs[ip];
+        let x = self.x0[pair.node] + Self::vec3(full, pair.node, 0);
+        let g = obstacles[pair.obstacle]
+            .gap(&x)
+            .ok_or_else(|| self.gap_error(pair.node, lambda))?;
+        let r = pair.law.force(g.h);
+        let dr = pair.law.stiffness(g.h);
+        let kc = std::array::from_fn(|i| {
+            std::array::from_fn(|j| -(dr * g.n[i] * g.n[j] + r * g.dn[(i, j)]))
+        });
+        Ok((pair.node, kc))
+    }
+
     /// Contact reactions of the active pairs at the full state.
     pub fn contact_forces(&self, full: &[f64], lambda: f64) -> Result<Vec<NodalContact>> {
         let mut out = Vec::with_capacity(self.active.len());
@@ -690,20 +739,13 @@ impl ContinuationProblem for ShellModel {
         }
         let obstacles = self.obstacles_at(lambda);
         for &ip in &self.active {
-            let pair = &self.pairs[ip];
-            let x = self.x0[pair.node] + Self::vec3(&full, pair.node, 0);
-            let g = obstacles[pair.obstacle]
-                .gap(&x)
-                .ok_or_else(|| self.gap_error(pair.node, lambda))?;
-            let r = pair.law.force(g.h);
-            let dr = pair.law.stiffness(g.h);
+            let (node, kc) = self.contact_block(ip, &full, &obstacles, lambda)?;
             // The gap reads x − lambda V: the lambda column is −K_c V.
-            let vel = self.motions[pair.obstacle].velocity();
+            let vel = self.motions[self.pairs[ip].obstacle].velocity();
             for i in 0..3 {
                 for j in 0..3 {
-                    let v = -(dr * g.n[i] * g.n[j] + r * g.dn[(i, j)]);
-                    add(&self.free, &mut rl, dof(pair.node, i), dof(pair.node, j), v);
-                    rl[dof(pair.node, i)] -= v * vel[j];
+                    add(&self.free, &mut rl, dof(node, i), dof(node, j), kc[i][j]);
+                    rl[dof(node, i)] -= kc[i][j] * vel[j];
                 }
             }
         }

@@ -1,4 +1,4 @@
-//! `anm buckle SCENE [--lambda L]`: linearized buckling about a state of
+//! `anm buckle SCENE [--lambda L | --time T]`: linearized buckling about a state of
 //! the path, as Abaqus *BUCKLE (Abaqus Theory Guide, "Eigenvalue buckling
 //! prediction"): the lowest eigenpairs of
 //!
@@ -15,12 +15,22 @@
 //! plus the initial-displacement terms of the linear prebuckling increment
 //! U_t (of the order of its strains). The critical load is
 //! lambda_cr = lambda_0 + mu. (B2) is taken by the central difference
-//! (Kt(+h) − Kt(−h)) / 2h, h = 1e-3 × |lambda_end|: exact for the shell's
+//! (Kt(+h) − Kt(−h)) / 2h, h = 0.1 × |lambda_end|: exact for the shell's
 //! tangent, which is quadratic in the state (St Venant–Kirchhoff with
-//! quadratic strains), up to round-off of 1e-16 |K| / h. The eigenpairs
+//! quadratic strains), up to round-off of 1e-16 |K| / h. Contact enters
+//! K_0 only: K_sigma leaves out the contact part of the tangent, which is
+//! held at the base state as Abaqus holds the contact state in *BUCKLE
+//! (the law of eq. 3 is not quadratic, and its stiffness changes by
+//! orders of magnitude across its switch). The eigenpairs
 //! come from [`crate::linalg::eigen::pencil`] (subspace iteration on our
 //! LDLᵀ factorization of K_0, which must be positive definite: a base
 //! state past a critical point is refused with its negative pivot count).
+//!
+//! A scene with [friction] is buckled about its state at a time t
+//! (`--time`), reached by its run in time, with K_0 the tied tangent of
+//! [`crate::shell::stability`] (eq. S1: sticking nodes held in their
+//! obstacle's tangent plane, the Coulomb limit) and lambda_0 = λ(t), the
+//! load ramp's value; mu then scales the ramped loads.
 //!
 //! Outputs: the eigenvalue table on stdout; with `-o DIR`, buckle.csv,
 //! buckle.json and one `buckle_mode_K.vtu` per mode (the mode on the
@@ -30,10 +40,14 @@ use crate::error::{Error, Result};
 use crate::linalg::{LinearSolver, SparseMatrix, eigen};
 use crate::output::mode;
 use crate::run::build::build_model;
+use crate::run::shell_time;
 use crate::scene::shell::ShellScene;
 use crate::series::path::Path as AnmPath;
 use crate::series::stop::Stop;
 use crate::series::{ContinuationProblem, continuation::factorize};
+use crate::shell::model::ShellModel;
+use crate::shell::stability::{self, Tie};
+use crate::shell::time_path::TimeStop;
 use serde::Serialize;
 use std::path::Path;
 
@@ -66,6 +80,11 @@ pub struct BuckleReport {
     pub dofs: usize,
     /// lambda_0 of the base state.
     pub lambda_base: f64,
+    /// The time of the base state (friction scenes).
+    pub time_base: Option<f64>,
+    /// Friction nodes tied (sticking) and left free (slipping) there.
+    pub sticking: usize,
+    pub slipping: usize,
     /// ANM steps to reach it.
     pub path_steps: usize,
     pub modes: Vec<Mode>,
@@ -73,31 +92,44 @@ pub struct BuckleReport {
     pub solves: usize,
     pub subspace: usize,
     pub wall_s: f64,
+    /// Why the linearization may not predict the critical point here.
+    pub warnings: Vec<String>,
 }
 
-/// Linearized buckling of `scene` about the state at `lambda_base`
-/// (module docs): `count` modes; files into `out_dir` when given.
-pub fn buckle(
-    scene: &ShellScene,
-    lambda_base: f64,
-    count: usize,
-    out_dir: Option<&Path>,
-) -> Result<BuckleReport> {
-    let start = std::time::Instant::now();
+/// The state to buckle about.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Base {
+    /// The ANM path of a scene without friction at this lambda.
+    Lambda(f64),
+    /// A friction scene's run in time at this time (s).
+    Time(f64),
+}
+
+/// The base state: the model there, its unknowns, lambda, the sticking
+/// contact nodes to tie (node, unit normal, stiffness) and the steps taken.
+struct BaseState {
+    model: ShellModel,
+    u0: Vec<f64>,
+    lambda: f64,
+    ties: Vec<Tie>,
+    slipping: usize,
+    steps: usize,
+}
+
+/// The ANM path of a scene without friction up to `lambda_base`.
+fn lambda_base_state(scene: &ShellScene, lambda_base: f64) -> Result<BaseState> {
     let mut model = build_model(scene)?;
     model.length_scale = scene.length_scale;
-    let n = model.ndof();
     let mut cfg = scene.solver.clone();
-    let scale = cfg.lambda_end.abs();
-    cfg.lambda_scale = scale;
-    let mut u0 = vec![0.0; n];
-    let mut path_steps = 0;
+    cfg.lambda_scale = cfg.lambda_end.abs();
+    let mut u0 = vec![0.0; model.ndof()];
+    let mut steps = 0;
     if lambda_base != 0.0 {
         cfg.lambda_end = lambda_base;
-        let mut path = AnmPath::new(&mut model, u0.clone(), 0.0, cfg.clone());
+        let mut path = AnmPath::new(&mut model, u0.clone(), 0.0, cfg);
         loop {
             match path.step() {
-                Ok(_) => path_steps += 1,
+                Ok(_) => steps += 1,
                 Err(Stop::End { .. }) => break,
                 Err(Stop::Failed(e)) => return Err(e),
                 Err(other) => {
@@ -111,9 +143,97 @@ pub fn buckle(
         }
         u0 = path.state().0.to_vec();
     }
+    Ok(BaseState {
+        model,
+        u0,
+        lambda: lambda_base,
+        ties: vec![],
+        slipping: 0,
+        steps,
+    })
+}
+
+/// A friction scene's run in time up to `t`: the state there, its load
+/// factor, and its sticking nodes tied ([`stability`], eq. S1: K_0 is the
+/// tied tangent).
+fn time_base_state(scene: &ShellScene, t: f64) -> Result<BaseState> {
+    let mut sc = scene.clone();
+    let fr = sc.friction.as_mut().expect("a friction scene");
+    fr.t_end = t;
+    fr.output_step = t;
+    let (run, dae) = shell_time::solve(&sc)?;
+    let last = match (&run.stop, run.samples.last()) {
+        (TimeStop::End, Some(last)) if (last.t - t).abs() <= 1e-9 * t => last.clone(),
+        (stop, _) => {
+            return Err(Error::Invalid {
+                file: scene.file.clone(),
+                key: "--time".into(),
+                problem: format!("the run in time did not reach t = {t}: {stop:?}"),
+            });
+        }
+    };
+    let (ties, slipping) = stability::stick_ties(&dae.model, &last.friction, &dae.laws.law);
+    let model = dae.model;
+    Ok(BaseState {
+        u0: model.reduce(&last.full),
+        model,
+        lambda: last.lambda,
+        ties,
+        slipping,
+        steps: run.stats.steps,
+    })
+}
+
+/// Linearized buckling of `scene` about the state `base` (module docs):
+/// `count` modes; files into `out_dir` when given.
+pub fn buckle(
+    scene: &ShellScene,
+    base: Base,
+    count: usize,
+    out_dir: Option<&Path>,
+) -> Result<BuckleReport> {
+    let start = std::time::Instant::now();
+    let state = match (base, scene.friction.is_some()) {
+        (Base::Lambda(l), false) => lambda_base_state(scene, l)?,
+        (Base::Time(t), true) => {
+            if !(t > 0.0 && t.is_finite()) {
+                return Err(Error::Invalid {
+                    file: scene.file.clone(),
+                    key: "--time".into(),
+                    problem: format!("must be a positive time, got {t}"),
+                });
+            }
+            time_base_state(scene, t)?
+        }
+        (Base::Lambda(_), true) => {
+            return Err(Error::Invalid {
+                file: scene.file.clone(),
+                key: "--lambda".into(),
+                problem: "a scene with [friction] reaches its states in time: give --time".into(),
+            });
+        }
+        (Base::Time(_), false) => {
+            return Err(Error::Invalid {
+                file: scene.file.clone(),
+                key: "--time".into(),
+                problem: "only a scene with [friction] runs in time: give --lambda".into(),
+            });
+        }
+    };
+    let BaseState {
+        mut model,
+        u0,
+        lambda: lambda_base,
+        ties,
+        slipping,
+        steps: path_steps,
+    } = state;
+    let n = model.ndof();
+    let cfg = scene.solver.clone();
+    let scale = cfg.lambda_end.abs();
     let mut lu = LinearSolver::new(cfg.linear);
     let mut stats = crate::series::Stats::default();
-    let (k0, r_lambda) = model.tangent(&u0, lambda_base)?;
+    let (k0, r_lambda) = stability::tied_tangent(&mut model, &u0, lambda_base, &ties)?;
     let f0 = factorize(&mut lu, &k0, &mut stats, path_steps, lambda_base)?;
     if let Some((neg, _, _)) = f0.inertia()
         && neg > 0
@@ -132,14 +252,20 @@ pub fn buckle(
     // (B2) by central differences along the prebuckling tangent.
     let h = 0.1 * scale;
     let at = |s: f64| -> Vec<f64> { u0.iter().zip(&ut).map(|(u, t)| u + s * t).collect() };
+    // Contact stays as at the base state (its pairs and the law's
+    // stiffness are in K_0, not in K_sigma): eq. (3)'s stiffness changes
+    // by orders of magnitude across the law's switch, and its derivative
+    // is no initial-stress stiffness (Abaqus *BUCKLE likewise holds the
+    // contact state of the base state).
     let (kp, _) = model.tangent(&at(h), lambda_base + h)?;
+    let kcp = model.contact_tangent(&at(h), lambda_base + h)?;
     let (km, _) = model.tangent(&at(-h), lambda_base - h)?;
+    let kcm = model.contact_tangent(&at(-h), lambda_base - h)?;
     let mut ks = SparseMatrix::new(n);
-    for (i, j, v) in kp.entries() {
-        ks.add(i, j, v / (2.0 * h));
-    }
-    for (i, j, v) in km.entries() {
-        ks.add(i, j, -v / (2.0 * h));
+    for (matrix, sign) in [(&kp, 1.0), (&kcp, -1.0), (&km, -1.0), (&kcm, 1.0)] {
+        for (i, j, v) in matrix.entries() {
+            ks.add(i, j, sign * v / (2.0 * h));
+        }
     }
     let settings = eigen::Settings {
         count,
@@ -178,17 +304,25 @@ pub fn buckle(
             vector: p.vector,
         });
     }
-    let report = BuckleReport {
+    let mut report = BuckleReport {
         scene: scene.file.display().to_string(),
         dofs: n,
         lambda_base,
+        time_base: match base {
+            Base::Time(t) => Some(t),
+            Base::Lambda(_) => None,
+        },
+        sticking: ties.len(),
+        slipping,
         path_steps,
         modes,
         iterations: work.iterations,
         solves: work.solves,
         subspace: work.subspace,
         wall_s: start.elapsed().as_secs_f64(),
+        warnings: vec![],
     };
+    report.warnings = opposite_pairs(&report.modes);
     if let Some(d) = out_dir {
         crate::output::write_json(&d.join("buckle.json"), &report)?;
         let rows: Vec<Vec<f64>> = report
@@ -221,11 +355,38 @@ pub fn buckle(
     Ok(report)
 }
 
+/// Modes whose mu come in opposite pairs (|mu_i + mu_j| below 5 % of
+/// |mu_i|): K_sigma is indefinite on a soft direction of K_0 (a slack
+/// region, e.g. a strip's edge near a contact), where the linear
+/// extrapolation of the tangent from the base state says nothing of the
+/// path (the path's own detection, `anm run`, does).
+fn opposite_pairs(modes: &[Mode]) -> Vec<String> {
+    let mut w = vec![];
+    for (i, a) in modes.iter().enumerate() {
+        for b in &modes[i + 1..] {
+            if a.mu * b.mu < 0.0 && (a.mu + b.mu).abs() < 0.05 * a.mu.abs() {
+                w.push(format!(
+                    "modes {} and {} have opposite mu ({:.3e}, {:.3e}): K_sigma is indefinite on a soft direction of K_0; the linearized critical load is not predictive there (locate the point on the path with `anm run`)",
+                    a.index, b.index, a.mu, b.mu
+                ));
+            }
+        }
+    }
+    w
+}
+
 /// The eigenvalue table printed by `anm buckle`.
 pub fn table(r: &BuckleReport) -> String {
+    let about = match r.time_base {
+        Some(t) => format!(
+            "t = {t} (lambda = {}; {} sticking friction nodes tied, {} slipping)",
+            r.lambda_base, r.sticking, r.slipping
+        ),
+        None => format!("lambda = {}", r.lambda_base),
+    };
     let mut s = format!(
-        "{}: linearized buckling about lambda = {} ({} dofs, {} path steps; {} iterations, {} vectors, {} solves, {:.3} s)\n",
-        r.scene, r.lambda_base, r.dofs, r.path_steps, r.iterations, r.subspace, r.solves, r.wall_s
+        "{}: linearized buckling about {about} ({} dofs, {} path steps; {} iterations, {} vectors, {} solves, {:.3} s)\n",
+        r.scene, r.dofs, r.path_steps, r.iterations, r.subspace, r.solves, r.wall_s
     );
     s.push_str("| mode | mu | lambda_critical | residual | half-waves | wavelength | uz crests across y | at (x, y) | x where abs(uz) > max/2 |\n|---|---|---|---|---|---|---|---|---|\n");
     for m in &r.modes {
@@ -243,6 +404,9 @@ pub fn table(r: &BuckleReport) -> String {
                 w.count, w.at[0], w.at[1], w.extent_x[0], w.extent_x[1]
             )),
         ));
+    }
+    for w in &r.warnings {
+        s.push_str(&format!("warning: {w}\n"));
     }
     s
 }

@@ -180,3 +180,71 @@ fn check_prints_the_strip_path() {
         assert!(out.contains(part), "`{out}` lacks `{part}`");
     }
 }
+
+/// A crowned roll (`obstacle.crown`, `face`): the strip of
+/// strip-wrinkling.toml runs at the radius of its middle section, so its
+/// middle row starts at the path's offset from the roll and its edges off
+/// it by the crown's fall there (0.5 mm at ±0.5 m for 0.5 mm over a 1 m
+/// face); bad crowns name the key.
+#[test]
+fn a_crowned_roll_is_read_and_bad_crowns_name_the_key() {
+    let sc = load(Path::new("scenes/strip-wrinkling.toml")).expect("scene");
+    let roll = &sc.obstacles[0].shape;
+    let arc = &sc.mesh.groups["roll_arc"];
+    let gaps: Vec<(f64, f64)> = arc
+        .iter()
+        .map(|&n| {
+            let x = sc.mesh.nodes[n];
+            (x.x, roll.gap(&x).expect("a gap").h)
+        })
+        .collect();
+    for &(x, h) in &gaps {
+        let expected = 1e-8 + 5e-4 * (2.0 * x).powi(2);
+        assert!(
+            (h - expected).abs() < 1e-12,
+            "gap {h} at x = {x}, expected {expected}"
+        );
+    }
+    let base = "scenes/strip-wrinkling.toml";
+    let cases: &[(&str, &str, &str, &str, &str)] = &[
+        (
+            "no-face.toml",
+            "face = 1.0\n",
+            "",
+            "obstacle[0].face",
+            "missing",
+        ),
+        (
+            "no-crown.toml",
+            "crown = 5e-4\n",
+            "",
+            "obstacle[0].face",
+            "without `crown`",
+        ),
+        (
+            "negative.toml",
+            "crown = 5e-4",
+            "crown = -5e-4",
+            "obstacle[0].crown",
+            ">= 0",
+        ),
+        (
+            "too-big.toml",
+            "crown = 5e-4",
+            "crown = 0.5",
+            "obstacle[0].crown",
+            "below the radius",
+        ),
+        (
+            "zero-face.toml",
+            "face = 1.0",
+            "face = 0.0",
+            "obstacle[0].face",
+            "> 0",
+        ),
+    ];
+    for (name, old, new, key, part) in cases {
+        let p = edited(base, "anm-crown-input", name, &[(old, new)]);
+        expect_invalid(&p, key, part);
+    }
+}

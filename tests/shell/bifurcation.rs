@@ -7,7 +7,7 @@
 
 use anm::run::run_loaded;
 use anm::scene::shell::{ShellScene, load};
-use anm::study::buckle::buckle;
+use anm::study::buckle::{Base, buckle};
 use std::f64::consts::PI;
 
 fn scene(name: &str) -> ShellScene {
@@ -44,7 +44,7 @@ fn elliptic_integral_by_the_agm_matches_tabulated_values() {
 #[test]
 fn euler_column_buckle_and_path_bifurcation_match_the_closed_form() {
     let sc = scene("euler-column");
-    let b = buckle(&sc, 0.0, 2, None).expect("buckle");
+    let b = buckle(&sc, Base::Lambda(0.0), 2, None).expect("buckle");
     print!("{}", anm::study::buckle::table(&b));
     let mu = b.modes[0].mu;
     println!("| case | lambda_cr | closed form | relative error |\n|---|---|---|---|");
@@ -88,7 +88,7 @@ fn euler_column_buckle_and_path_bifurcation_match_the_closed_form() {
     // lambda_b + mu_1; its linearization error is O((lambda* − lambda_b)²)
     // times the prebuckling nonlinearity (strains ~ 2e-5), far below 1e-6.
     let lb = 0.999 * e.lambda;
-    let near = buckle(&sc, lb, 1, None).expect("buckle near");
+    let near = buckle(&sc, Base::Lambda(lb), 1, None).expect("buckle near");
     let predicted = lb + near.modes[0].mu;
     let rel = (predicted - e.lambda).abs() / e.lambda;
     println!(
@@ -168,7 +168,7 @@ fn perfect_column_switches_to_the_bifurcated_branch_in_either_direction() {
 #[test]
 fn simply_supported_plate_buckles_at_the_closed_form_stress() {
     let sc = scene("plate-buckling");
-    let b = buckle(&sc, 0.0, 2, None).expect("buckle");
+    let b = buckle(&sc, Base::Lambda(0.0), 2, None).expect("buckle");
     print!("{}", anm::study::buckle::table(&b));
     let mu = b.modes[0].mu;
     println!(
@@ -321,10 +321,21 @@ fn bad_branch_keys_and_an_unstable_buckling_state_are_clear_errors() {
         assert!(msg.contains(key) && msg.contains("case"), "{msg}");
     }
     // Past the bifurcation the base state is unstable: refused, with why.
-    let e = buckle(&scene("euler-column"), 1.5, 1, None).expect_err("unstable base state");
+    let e = buckle(&scene("euler-column"), Base::Lambda(1.5), 1, None)
+        .expect_err("unstable base state");
     let msg = e.to_string();
     println!("{msg}");
     assert!(msg.contains("negative pivot"), "{msg}");
+    // A friction scene's states are in time, the others' in lambda.
+    let e = buckle(&scene("euler-column-in-time"), Base::Lambda(0.5), 1, None)
+        .expect_err("lambda on a friction scene");
+    assert!(e.to_string().contains("--time"), "{e}");
+    let e = buckle(&scene("euler-column"), Base::Time(0.5), 1, None)
+        .expect_err("time on a scene without friction");
+    assert!(e.to_string().contains("--lambda"), "{e}");
+    let e = buckle(&scene("euler-column-in-time"), Base::Time(-1.0), 1, None)
+        .expect_err("negative time");
+    assert!(e.to_string().contains("--time"), "{e}");
 }
 
 /// The cost comparison of issue 14 item 7 (`anm buckle --locate`): Newton
@@ -350,4 +361,38 @@ fn newton_bisection_and_the_anm_locate_the_same_euler_load() {
         n.lambda
     );
     assert!((n.lambda - 1.0).abs() <= 5e-3);
+}
+
+/// Item 1 on a path in time (shell::stability): the Euler column of
+/// euler-column.toml loaded in time by a [friction] scene whose contact
+/// never touches. The tied tangent is then the static tangent, and the
+/// critical point found between two output times (kappa interpolated
+/// linearly over 0.05 s = 0.06 P_cr) must be the closed form (+9.7e-4 on
+/// 20 elements on the ANM path); `anm buckle --time` about t = 0.5 must
+/// agree with it.
+#[test]
+fn stability_monitor_in_time_locates_the_euler_load() {
+    let sc = scene("euler-column-in-time");
+    let r = anm::run::shell_time::run(&sc, None).expect("run in time");
+    assert_eq!(r.events.len(), 1, "one critical point: {:?}", r.events);
+    let e = &r.events[0];
+    // The load is 1.2 P_cr at lambda = 1.
+    let p = 1.2 * e.lambda;
+    let b = buckle(&sc, Base::Time(0.5), 1, None).expect("buckle about t = 0.5");
+    let pb = 1.2 * b.modes[0].lambda_critical;
+    println!("| estimate | P / P_cr | vs closed form |\n|---|---|---|");
+    println!(
+        "| monitor in time (outputs {:?}) | {p:.7} | {:.2e} |",
+        e.bracket,
+        p - 1.0
+    );
+    println!("| anm buckle --time 0.5 | {pb:.7} | {:.2e} |", pb - 1.0);
+    assert_eq!(e.negative_pivots, [0, 1]);
+    assert!(e.bracket[0] <= e.t && e.t <= e.bracket[1]);
+    assert!((p - 1.0).abs() < 5e-3, "P / P_cr = {p}");
+    assert!((pb - p).abs() < 2e-4, "buckle {pb} vs monitor {p}");
+    // The cantilever's quarter wave.
+    let hw = e.half_waves.expect("a wavelength");
+    assert!((hw - 0.5).abs() < 0.05, "half-waves {hw}");
+    assert_eq!((b.sticking, b.slipping), (0, 0));
 }

@@ -13,4 +13,5 @@ mod patch_macneal_harder;
 mod plate_buckling_dolfinx;
 mod sheet_wrinkling_dolfinx;
 mod step_cost;
+mod strip_wrinkling;
 mod verification_scenes;

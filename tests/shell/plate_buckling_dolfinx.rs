@@ -12,7 +12,7 @@
 
 use crate::shell_common;
 use anm::scene::shell::{Load, load};
-use anm::study::buckle::buckle;
+use anm::study::buckle::{Base, buckle};
 use std::f64::consts::PI;
 use std::path::PathBuf;
 
@@ -99,7 +99,7 @@ fn plate_buckling_stress_matches_the_dolfinx_slepc_solid() {
         .expect("temp scene");
         let scn = load(&file).expect("refined scene");
         let _ = std::fs::remove_file(&file);
-        let b = buckle(&scn, 0.0, 1, None).expect("buckle");
+        let b = buckle(&scn, Base::Lambda(0.0), 1, None).expect("buckle");
         let sigma_ours = b.modes[0].mu * n_line / t;
         println!(
             "| anm buckle (shell, director free) | {n} x {n} | {} | {sigma_ours:.4} | {:.6} | {:.6} |",

@@ -14,7 +14,7 @@
 
 use crate::shell_common;
 use anm::scene::shell::load;
-use anm::study::buckle::buckle;
+use anm::study::buckle::{Base, buckle};
 use std::path::PathBuf;
 
 fn root() -> PathBuf {
@@ -135,7 +135,7 @@ fn sheet_wrinkling_matches_the_dolfinx_slepc_solid() {
         .expect("temp scene");
         let scn = load(&file).expect("refined scene");
         let _ = std::fs::remove_file(&file);
-        let b = buckle(&scn, lambda0, 2, None).expect("buckle");
+        let b = buckle(&scn, Base::Lambda(lambda0), 2, None).expect("buckle");
         // The pair's mode even in y (a crest on the centre line, an odd
         // count): the one the quarter 3D model holds.
         let even = b
