@@ -98,6 +98,15 @@ pub struct EventRecord {
     pub wavelength: Option<f64>,
     pub half_waves: Option<f64>,
     pub wave_direction: Option<String>,
+    /// The branch the path was on where the point was found: "primary", or
+    /// "secondary" after a switch (`solver.branch = "secondary"`); the
+    /// switching bifurcation itself is on the primary branch.
+    #[serde(default = "primary")]
+    pub branch: String,
+}
+
+fn primary() -> String {
+    "primary".into()
 }
 
 const STEP_COLUMNS: [&str; 11] = [
@@ -379,7 +388,7 @@ impl<'s> Recorder<'s> {
         Ok(())
     }
 
-    /// Records an event and rewrites events.csv (kind, lambda, step, a,
+    /// Records an event and rewrites events.csv (branch, kind, lambda, step, a,
     /// negative pivots before and after, bracket, kappa, factorizations,
     /// half-waves, wavelength, direction, mode file).
     pub fn event(&mut self, e: EventRecord) -> Result<()> {
@@ -388,6 +397,7 @@ impl<'s> Recorder<'s> {
         let path = d.join("events.csv");
         let mut w = csv::Writer::from_path(&path).map_err(csv_err(&path))?;
         w.write_record([
+            "branch",
             "kind",
             "lambda",
             "step",
@@ -406,6 +416,7 @@ impl<'s> Recorder<'s> {
         let opt = |x: Option<f64>| x.map(|v| format!("{v:.9e}")).unwrap_or_default();
         for e in &self.state.events {
             w.write_record([
+                e.branch.clone(),
                 e.kind.clone(),
                 format!("{:.17e}", e.lambda),
                 e.step.to_string(),

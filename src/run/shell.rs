@@ -896,6 +896,12 @@ fn record_event(rec: &mut Recorder, model: &ShellModel, e: Event) -> Result<Even
         wavelength: wave.map(|w| w.wavelength),
         half_waves: wave.map(|w| w.half_waves),
         wave_direction: wave.map(|w| w.direction.to_string()),
+        branch: if rec.state.switched_at.is_some() {
+            "secondary"
+        } else {
+            "primary"
+        }
+        .into(),
     };
     rec.event(r.clone())?;
     Ok(r)

@@ -265,6 +265,16 @@ fn cantilever_under_end_moment_bifurcates_out_of_plane_and_follows_the_branch() 
     assert!((0.78..0.80).contains(&b.lambda), "{}", b.lambda);
     assert!(rel <= 1e-6, "{rel:e}");
     assert_eq!(r.switched_at, Some(b.lambda));
+    // Reported branch by branch: the switching point is on the primary.
+    assert_eq!(b.branch, "primary");
+    for e in &r.events {
+        let expected = if e.step <= b.step {
+            "primary"
+        } else {
+            "secondary"
+        };
+        assert_eq!(e.branch, expected, "{e:?}");
+    }
     // The followed branch is out of plane; the tip of the planar (primary)
     // solution would have uy = 0 and be back at the clamp (ux = -L).
     let uy = r.end["uy_tip"];
