@@ -219,6 +219,7 @@ fn write_events(
         "lambda",
         "t_before",
         "t_after",
+        "restarts",
         "negative_pivots_before",
         "negative_pivots_after",
         "kappa_before",
@@ -245,6 +246,7 @@ fn write_events(
             format!("{:.12e}", e.lambda),
             format!("{:.12e}", e.bracket[0]),
             format!("{:.12e}", e.bracket[1]),
+            e.restarts.to_string(),
             e.negative_pivots[0].to_string(),
             e.negative_pivots[1].to_string(),
             format!("{:.9e}", e.kappa[0]),
@@ -307,6 +309,24 @@ pub fn run_with(scene: &ShellScene, out_dir: Option<&Path>, progress: bool) -> R
         }
     }
     let mut events = stability::events(&stable);
+    let cfg = config(scene);
+    for e in events
+        .iter_mut()
+        .filter(|e| e.detected_by == "negative pivots")
+    {
+        let at = |t: f64| run.samples.iter().find(|s| s.t == t);
+        let (Some(a), Some(b)) = (at(e.bracket[0]), at(e.bracket[1])) else {
+            continue;
+        };
+        let tied = e.tangent == "tied";
+        if let Some(l) = stability::locate(&mut dae, &cfg, a, b, tied, scene.solver.linear)? {
+            e.t = l.t;
+            e.lambda = l.lambda;
+            e.bracket = l.bracket;
+            e.restarts = l.restarts;
+            e.vector = l.mode;
+        }
+    }
     for e in &mut events {
         let full = dae.model.expand(&e.vector, 0.0);
         if let Some(w) = mode::wavelength(&dae.model.x0, &full) {

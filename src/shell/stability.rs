@@ -32,9 +32,14 @@
 //! Along a run, for each of the two, the number of negative pivots of the
 //! LDLᵀ (Sylvester's law of inertia) and the eigenvalue of smallest
 //! modulus kappa are taken at every output time; a rise of the count
-//! between two outputs is a critical point, located at the root of kappa
-//! interpolated linearly between them (exact to O(Δt²) for a smooth
-//! kappa; a finer `output_step` brackets it closer).
+//! between two outputs is a critical point ([`events`]: at the root of
+//! kappa interpolated linearly between them).
+//!
+//! A crossing is then located to 1e-7 relative in t ([`locate`]): the run
+//! restarts from the earlier output's state and integrates to a trial
+//! time chosen by the Illinois variant of regula falsi on kappa, keeping
+//! the side of the bracket by the count, until the bracket is below
+//! 1e-7 t; λ follows from the load ramp.
 //!
 //! A run that meets a supercritical bifurcation between two outputs may
 //! follow the stable bifurcated branch (the regularized law lets the
@@ -207,6 +212,102 @@ pub fn monitor(
     Ok(out)
 }
 
+/// What [`locate`] found: the root of kappa in the final bracket.
+#[derive(Clone, Debug)]
+pub struct Located {
+    pub t: f64,
+    pub lambda: f64,
+    pub bracket: [f64; 2],
+    pub kappa: f64,
+    /// Restarts of the run (one integration and one or two tangent
+    /// factorizations each).
+    pub restarts: usize,
+    pub mode: Vec<f64>,
+}
+
+/// Locates (None without inertia) a rise of the negative pivot count of the static (`tied =
+/// false`) or tied tangent between the outputs `a` and `b` (module docs);
+/// `cfg` is the run's configuration.
+pub fn locate(
+    dae: &mut super::friction_dae::FrictionDae,
+    cfg: &super::time_path::TimeConfig,
+    a: &TimeSample,
+    b: &TimeSample,
+    tied: bool,
+    linear: Choice,
+) -> Result<Option<Located>> {
+    let law = dae.laws.law;
+    let mut lu = LinearSolver::new(linear);
+    let mut check = |model: &mut ShellModel, s: &TimeSample, start: Option<&[f64]>| {
+        let ties = if tied {
+            stick_ties(model, &s.friction, &law).0
+        } else {
+            vec![]
+        };
+        let u = model.reduce(&s.full);
+        let (k, _) = tied_tangent(model, &u, s.lambda, &ties)?;
+        inertia(&mut lu, &k, start, s.t)
+    };
+    let ia = check(&mut dae.model, a, None)?;
+    let ib = check(&mut dae.model, b, Some(&ia.mode))?;
+    // A non-symmetric tangent has no inertia to keep the bracket by.
+    let (Some(n_left), Some(_)) = (ia.negative_pivots, ib.negative_pivots) else {
+        return Ok(None);
+    };
+    let (mut left, mut k_left) = (a.clone(), ia.kappa);
+    let (mut t_right, mut k_right) = (b.t, ib.kappa);
+    let mut mode = ib.mode;
+    let mut side = 0i8;
+    let mut restarts = 0;
+    while t_right - left.t > 1e-7 * t_right && restarts < 60 {
+        let width = t_right - left.t;
+        let secant = if k_left > 0.0 && k_right < 0.0 {
+            left.t + width * k_left / (k_left - k_right)
+        } else {
+            left.t + 0.5 * width
+        };
+        let tm = secant.clamp(left.t + 0.01 * width, t_right - 0.01 * width);
+        let mut sub = cfg.clone();
+        sub.t_end = tm;
+        sub.outputs = vec![tm];
+        let run = super::time_path::run_from(dae, &sub, &mut |_, _| {}, left.state.clone())?;
+        restarts += 1;
+        let m = run.samples.last().expect("the sample at tm").clone();
+        let im = check(&mut dae.model, &m, Some(&mode))?;
+        mode = im.mode.clone();
+        if im.negative_pivots == Some(n_left) {
+            left = m;
+            k_left = im.kappa;
+            if side == 1 {
+                k_right *= 0.5;
+            }
+            side = 1;
+        } else {
+            t_right = tm;
+            k_right = im.kappa;
+            if side == -1 {
+                k_left *= 0.5;
+            }
+            side = -1;
+        }
+    }
+    let width = t_right - left.t;
+    let s = if k_left > 0.0 && k_right < 0.0 {
+        k_left / (k_left - k_right)
+    } else {
+        0.5
+    };
+    let t = left.t + s * width;
+    Ok(Some(Located {
+        t,
+        lambda: dae.laws.load.value(t),
+        bracket: [left.t, t_right],
+        kappa: k_left,
+        restarts,
+        mode,
+    }))
+}
+
 /// A critical point between two output times.
 #[derive(Clone, Debug, Serialize)]
 pub struct TimeEvent {
@@ -220,8 +321,11 @@ pub struct TimeEvent {
     /// step).
     pub t: f64,
     pub lambda: f64,
-    /// The two outputs that bracket it.
+    /// The bracket: the two outputs, or after [`locate`] its final one.
     pub bracket: [f64; 2],
+    /// Restarts spent by [`locate`] (0: not located, the interpolation
+    /// between the outputs).
+    pub restarts: usize,
     pub negative_pivots: [usize; 2],
     pub kappa: [f64; 2],
     /// Mode file (mode_K.vtu), the mode at the later output.
@@ -261,6 +365,7 @@ pub fn events(stability: &[SampleStability]) -> Vec<TimeEvent> {
                 t,
                 lambda,
                 bracket,
+                restarts: 0,
                 negative_pivots: [na, nb],
                 kappa: [a.kappa, b.kappa],
                 mode: None,

@@ -76,6 +76,8 @@ pub struct TimeSample {
     /// Full dof vector.
     pub full: Vec<f64>,
     pub friction: Vec<NodeFriction>,
+    /// The DAE's state there (a run restarts from it: [`run_from`]).
+    pub state: TimeState,
 }
 
 /// Why a run stopped.
@@ -118,23 +120,33 @@ pub fn run(
     cfg: &TimeConfig,
     progress: &mut dyn FnMut(f64, usize),
 ) -> Result<TimeRun> {
-    let n_pairs = dae.model.pairs.len();
-    let mut s = TimeState {
+    let start = TimeState {
         t: 0.0,
         u: vec![0.0; dae.model.ndof()],
-        w: vec![[0.0; 2]; n_pairs],
+        w: vec![[0.0; 2]; dae.model.pairs.len()],
     };
+    run_from(dae, cfg, progress, start)
+}
+
+/// Integrates from the state `s` (made consistent first) to t_end; the
+/// first sample is at s.t, then every output time after it.
+pub fn run_from(
+    dae: &mut FrictionDae,
+    cfg: &TimeConfig,
+    progress: &mut dyn FnMut(f64, usize),
+    mut s: TimeState,
+) -> Result<TimeRun> {
     let mut stats = TimeStats::default();
     let kinks: Vec<f64> = {
         let mut k: Vec<f64> = dae.laws.kinks();
-        k.retain(|&t| t > 0.0);
+        k.retain(|&t| t > s.t);
         k.sort_by(f64::total_cmp);
         k
     };
     let mut samples = vec![];
-    let mut next_out = 0;
+    let mut next_out = cfg.outputs.iter().take_while(|&&t| t <= s.t).count();
     consistent(dae, &mut s, cfg, &mut stats)?;
-    samples.push(sample(dae, &s, 0.0)?);
+    samples.push(sample(dae, &s, s.t)?);
     if cfg.stepping != Stepping::Explicit {
         return run_implicit(dae, cfg, progress, s, samples, stats, &kinks);
     }
@@ -368,8 +380,8 @@ fn run_implicit(
 ) -> Result<TimeRun> {
     use super::implicit_step::{self, Trial};
     use crate::series::rodas::{ERROR_ORDER, RODAS4};
-    let mut next_out = 0;
-    let mut h = cfg.t_end * 1e-4;
+    let mut next_out = cfg.outputs.iter().take_while(|&&t| t <= s.t).count();
+    let mut h = (cfg.t_end - s.t) * 1e-4;
     // Error test: |error of the translations| ≤ max(eps × the largest
     // translation so far, 1e-13 solver.length_scale), the second term a
     // few hundred round-offs of the node coordinates, which the residual's
@@ -627,6 +639,7 @@ fn sample(dae: &FrictionDae, s: &TimeState, t: f64) -> Result<TimeSample> {
         lambda,
         full,
         friction,
+        state: TimeState { t, ..s.clone() },
     })
 }
 

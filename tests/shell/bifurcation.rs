@@ -373,13 +373,14 @@ fn newton_bisection_and_the_anm_locate_the_same_euler_load() {
     assert!((n.lambda - 1.0).abs() <= 5e-3);
 }
 
-/// Item 1 on a path in time (shell::stability): the Euler column of
+/// Items 1 and 2 on a path in time (shell::stability): the Euler column of
 /// euler-column.toml loaded in time by a [friction] scene whose contact
-/// never touches. The tied tangent is then the static tangent, and the
-/// critical point found between two output times (kappa interpolated
-/// linearly over 0.05 s = 0.06 P_cr) must be the closed form (+9.7e-4 on
-/// 20 elements on the ANM path); `anm buckle --time` about t = 0.5 must
-/// agree with it.
+/// group is the clamped end (no contact force on the free unknowns). The
+/// tied tangent is then the static tangent; the critical point, found
+/// between two outputs 0.05 s apart and located by restarts from the
+/// earlier one, must be the closed form (+9.7e-4 on 20 elements) and the
+/// ANM path's location on the same mesh to 1e-6; `anm buckle --time`
+/// about t = 0.5 must agree with it.
 #[test]
 fn stability_monitor_in_time_locates_the_euler_load() {
     let sc = scene("euler-column-in-time");
@@ -388,19 +389,37 @@ fn stability_monitor_in_time_locates_the_euler_load() {
     let e = &r.events[0];
     // The load is 1.2 P_cr at lambda = 1.
     let p = 1.2 * e.lambda;
+    let path = run_loaded(&scene("euler-column"), None, false).expect("lambda path");
+    let on_path = path
+        .events
+        .iter()
+        .find(|e| e.kind == "bifurcation")
+        .expect("located on the path")
+        .lambda;
     let b = buckle(&sc, Base::Time(0.5), 1, None).expect("buckle about t = 0.5");
     let pb = 1.2 * b.modes[0].lambda_critical;
     println!("| estimate | P / P_cr | vs closed form |\n|---|---|---|");
     println!(
-        "| monitor in time (outputs {:?}) | {p:.7} | {:.2e} |",
-        e.bracket,
+        "| monitor in time, located ({} restarts, bracket {:.1e} s) | {p:.9} | {:.2e} |",
+        e.restarts,
+        e.bracket[1] - e.bracket[0],
         p - 1.0
     );
-    println!("| anm buckle --time 0.5 | {pb:.7} | {:.2e} |", pb - 1.0);
+    println!(
+        "| ANM path (euler-column.toml) | {on_path:.9} | {:.2e} |",
+        on_path - 1.0
+    );
+    println!("| anm buckle --time 0.5 | {pb:.9} | {:.2e} |", pb - 1.0);
     assert_eq!(e.negative_pivots, [0, 1]);
+    assert_eq!(e.detected_by, "negative pivots");
     assert!(e.bracket[0] <= e.t && e.t <= e.bracket[1]);
+    assert!(e.bracket[1] - e.bracket[0] <= 1e-7 * e.t, "{:?}", e.bracket);
     assert!((p - 1.0).abs() < 5e-3, "P / P_cr = {p}");
-    assert!((pb - p).abs() < 2e-4, "buckle {pb} vs monitor {p}");
+    assert!(
+        (p / on_path - 1.0).abs() < 1e-6,
+        "{p} vs the path's {on_path}"
+    );
+    assert!((pb - p).abs() < 1e-5, "buckle {pb} vs monitor {p}");
     // The cantilever's quarter wave.
     let hw = e.half_waves.expect("a wavelength");
     assert!((hw - 0.5).abs() < 0.05, "half-waves {hw}");
