@@ -314,12 +314,16 @@ pub fn run_with(scene: &ShellScene, out_dir: Option<&Path>, progress: bool) -> R
         .iter_mut()
         .filter(|e| e.detected_by == "negative pivots")
     {
-        let at = |t: f64| run.samples.iter().find(|s| s.t == t);
-        let (Some(a), Some(b)) = (at(e.bracket[0]), at(e.bracket[1])) else {
-            continue;
-        };
         let tied = e.tangent == "tied";
-        if let Some(l) = stability::locate(&mut dae, &cfg, a, b, tied, scene.solver.linear)? {
+        let [a, b] = e.samples;
+        let inertia = |k: usize| {
+            let st = &stable[k];
+            if tied { &st.tied } else { &st.free }
+        };
+        let a_end = (&run.samples[a], inertia(a));
+        let b_end = (&run.samples[b], inertia(b));
+        if let Some(l) = stability::locate(&mut dae, &cfg, a_end, b_end, tied, scene.solver.linear)?
+        {
             e.t = l.t;
             e.lambda = l.lambda;
             e.bracket = l.bracket;
@@ -376,7 +380,7 @@ pub fn run_with(scene: &ShellScene, out_dir: Option<&Path>, progress: bool) -> R
             .collect(),
         header: head.clone(),
         history: rows.clone(),
-        events: events.clone(),
+        events,
     };
     if let Some(dir) = out_dir {
         std::fs::create_dir_all(dir).map_err(|source| Error::Io {

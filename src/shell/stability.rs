@@ -87,13 +87,7 @@ pub fn stick_ties(
         return (ties, 0);
     }
     for f in friction {
-        let Some(pair) = model
-            .pairs
-            .iter()
-            .find(|p| p.node == f.node && p.obstacle == f.obstacle)
-        else {
-            continue;
-        };
+        let pair = &model.pairs[f.pair];
         if f.rn <= 10.0 * pair.law.eta {
             continue;
         }
@@ -226,13 +220,14 @@ pub struct Located {
 }
 
 /// Locates (None without inertia) a rise of the negative pivot count of the static (`tied =
-/// false`) or tied tangent between the outputs `a` and `b` (module docs);
-/// `cfg` is the run's configuration.
+/// false`) or tied tangent between the outputs `a` and `b`, whose
+/// inertias the monitor took (module docs); `cfg` is the run's
+/// configuration.
 pub fn locate(
     dae: &mut super::friction_dae::FrictionDae,
     cfg: &super::time_path::TimeConfig,
-    a: &TimeSample,
-    b: &TimeSample,
+    (a, ia): (&TimeSample, &Inertia),
+    (b, ib): (&TimeSample, &Inertia),
     tied: bool,
     linear: Choice,
 ) -> Result<Option<Located>> {
@@ -248,15 +243,13 @@ pub fn locate(
         let (k, _) = tied_tangent(model, &u, s.lambda, &ties)?;
         inertia(&mut lu, &k, start, s.t)
     };
-    let ia = check(&mut dae.model, a, None)?;
-    let ib = check(&mut dae.model, b, Some(&ia.mode))?;
     // A non-symmetric tangent has no inertia to keep the bracket by.
     let (Some(n_left), Some(_)) = (ia.negative_pivots, ib.negative_pivots) else {
         return Ok(None);
     };
     let (mut left, mut k_left) = (a.clone(), ia.kappa);
     let (mut t_right, mut k_right) = (b.t, ib.kappa);
-    let mut mode = ib.mode;
+    let mut mode = ib.mode.clone();
     let mut side = 0i8;
     let mut restarts = 0;
     while t_right - left.t > 1e-7 * t_right && restarts < 60 {
@@ -326,6 +319,9 @@ pub struct TimeEvent {
     /// Restarts spent by [`locate`] (0: not located, the interpolation
     /// between the outputs).
     pub restarts: usize,
+    /// Indices of the two bracketing outputs among the run's samples.
+    #[serde(skip)]
+    pub samples: [usize; 2],
     pub negative_pivots: [usize; 2],
     pub kappa: [f64; 2],
     /// Mode file (mode_K.vtu), the mode at the later output.
@@ -359,13 +355,14 @@ pub fn events(stability: &[SampleStability]) -> Vec<TimeEvent> {
             let (Some(na), Some(nb)) = (a.negative_pivots, b.negative_pivots) else {
                 continue;
             };
-            let event = |t: f64, lambda: f64, bracket: [f64; 2], by, vector: &[f64]| TimeEvent {
+            let event = |t: f64, lambda: f64, samples: [usize; 2], by, vector: &[f64]| TimeEvent {
                 tangent,
                 detected_by: by,
                 t,
                 lambda,
-                bracket,
+                bracket: samples.map(|k| stability[k].t),
                 restarts: 0,
+                samples,
                 negative_pivots: [na, nb],
                 kappa: [a.kappa, b.kappa],
                 mode: None,
@@ -385,7 +382,7 @@ pub fn events(stability: &[SampleStability]) -> Vec<TimeEvent> {
                 out.push(event(
                     ta + s * (tb - ta),
                     lambda,
-                    [ta, tb],
+                    [i, i + 1],
                     "negative pivots",
                     &b.mode,
                 ));
@@ -404,7 +401,7 @@ pub fn events(stability: &[SampleStability]) -> Vec<TimeEvent> {
                 && b.kappa < c.kappa
                 && b.kappa < 0.1 * largest;
             if dip {
-                out.push(event(tb, w[1].lambda, [ta, next.t], "kappa dip", &b.mode));
+                out.push(event(tb, w[1].lambda, [i, i + 2], "kappa dip", &b.mode));
                 largest = 0.0;
             }
         }

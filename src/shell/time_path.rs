@@ -55,6 +55,8 @@ pub struct TimeConfig {
 /// The friction state of one node at an output time.
 #[derive(Clone, Debug)]
 pub struct NodeFriction {
+    /// Index into the model's contact pairs.
+    pub pair: usize,
     pub node: usize,
     pub obstacle: usize,
     pub gap: f64,
@@ -144,7 +146,7 @@ pub fn run_from(
         k
     };
     let mut samples = vec![];
-    let mut next_out = cfg.outputs.iter().take_while(|&&t| t <= s.t).count();
+    let mut next_out = first_output(cfg, s.t);
     consistent(dae, &mut s, cfg, &mut stats)?;
     samples.push(sample(dae, &s, s.t)?);
     if cfg.stepping != Stepping::Explicit {
@@ -250,6 +252,11 @@ fn finish(
         stats,
         skipped: dae.skipped.clone(),
     }
+}
+
+/// Index of the first output time after t (a run that starts at t).
+fn first_output(cfg: &TimeConfig, t: f64) -> usize {
+    cfg.outputs.iter().take_while(|&&o| o <= t).count()
 }
 
 /// The first kink of the ramps after t, or t_end.
@@ -380,7 +387,7 @@ fn run_implicit(
 ) -> Result<TimeRun> {
     use super::implicit_step::{self, Trial};
     use crate::series::rodas::{ERROR_ORDER, RODAS4};
-    let mut next_out = cfg.outputs.iter().take_while(|&&t| t <= s.t).count();
+    let mut next_out = first_output(cfg, s.t);
     let mut h = (cfg.t_end - s.t) * 1e-4;
     // Error test: |error of the translations| ≤ max(eps × the largest
     // translation so far, 1e-13 solver.length_scale), the second term a
@@ -625,6 +632,7 @@ fn sample(dae: &FrictionDae, s: &TimeState, t: f64) -> Result<TimeSample> {
             .nodal(ob, &motion, &x, &xdot, rn)
             .expect("the gap is defined");
         friction.push(NodeFriction {
+            pair: ip,
             node,
             obstacle: pair.obstacle,
             gap: g.h,
