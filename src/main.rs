@@ -971,8 +971,15 @@ fn bench_shell(
     let scene = anm::scene::shell::load(path)?;
     eprintln!("{case}: reference runs (ANM N=20 eps=1e-12; Newton) ...");
     let reference = bs::reference(&scene)?;
+    // The key probe: the first history column after lambda.
+    let probe = reference
+        .report
+        .columns
+        .get(1)
+        .cloned()
+        .unwrap_or_else(|| "the key probe".into());
     let mut notes = format!(
-        "## {case}\n\nReference: {}; Newton (load control, |R|/|F| <= {:.0e}) differs from it by {:.2e} on uz_A. Output grid: lambda step {}. Wall times are medians of {repeat}.\n",
+        "## {case}\n\nReference: {}; Newton (load control, |R|/|F| <= {:.0e}) differs from it by {:.2e} on {probe}. Output grid: lambda step {}. Wall times are medians of {repeat}.\n",
         reference.name,
         bs::REFERENCE_RESIDUAL,
         reference.floor,
@@ -993,7 +1000,7 @@ fn bench_shell(
         },
     );
     notes += &anm::study::bench::markdown(&rows, &reference.name);
-    notes += &bs::targets(&rows, &costs);
+    notes += &bs::targets(&rows, &costs, &probe);
     eprintln!("{case}: skip measurements ...");
     notes += &bs::skip_markdown(&bs::skip_study(&scene, out)?);
     print!("{notes}");

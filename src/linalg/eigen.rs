@@ -140,6 +140,7 @@ pub fn pencil(
     };
     let mut x = start_vectors(n, q);
     let mut bx: Vec<Vec<f64>> = x.iter().map(|v| b_mul(v)).collect();
+    let mut last: Vec<Eigenpair> = vec![];
     for it in 1..=settings.max_iter {
         work.iterations = it;
         // Y = A⁻¹ B X, orthonormalized (keeps the projected matrices well
@@ -214,11 +215,31 @@ pub fn pencil(
         if converged {
             return Ok((pairs, work));
         }
+        last = pairs;
     }
-    Err(format!(
-        "subspace iteration did not converge in {} iterations ({} vectors)",
-        settings.max_iter, q
-    ))
+    Err(unconverged(&last, settings.max_iter, q))
+}
+
+/// Why the subspace iteration stopped, with its last estimates: their mu
+/// range, largest residual, and the sign that tells a load stiffening the
+/// base state (every mu < 0: K_sigma positive on the subspace, e.g. a
+/// membrane in pure tension, with no critical load in the load's direction).
+fn unconverged(last: &[Eigenpair], iterations: usize, vectors: usize) -> String {
+    let mut s = format!(
+        "subspace iteration did not converge in {iterations} iterations ({vectors} vectors)"
+    );
+    if last.is_empty() {
+        return s;
+    }
+    let lo = last.iter().map(|p| p.mu).fold(f64::INFINITY, f64::min);
+    let hi = last.iter().map(|p| p.mu).fold(f64::NEG_INFINITY, f64::max);
+    let worst = last.iter().map(|p| p.residual).fold(0.0, f64::max);
+    s += &format!("; last estimates of mu in [{lo:.3e}, {hi:.3e}], residuals up to {worst:.1e}");
+    if hi < 0.0 {
+        s += "; every estimate is negative: the load stiffens this base state \
+              (tension), so no critical load may lie in its direction";
+    }
+    s
 }
 
 /// y = A⁻¹ x of an inverse iteration; a non-finite solve is an error.
@@ -434,6 +455,25 @@ mod tests {
                 p.mu
             );
         }
+    }
+
+    /// B = +I (a load that stiffens, as tension does): every mu is
+    /// negative, and a run stopped before convergence says so with its
+    /// estimates instead of calling the matrix singular.
+    #[test]
+    fn an_unconverged_pencil_reports_its_estimates_and_a_stiffening_load() {
+        let m = 200;
+        let a = laplacian(m, 0.0);
+        let f = LinearSolver::default().factorize(&a).unwrap();
+        let s = Settings {
+            count: 3,
+            tol: 1e-14,
+            max_iter: 2,
+        };
+        let e = pencil(&f, &|x| a.mul_vec(x), &|x| x.to_vec(), m, &s).unwrap_err();
+        assert!(e.contains("did not converge in 2 iterations"), "{e}");
+        assert!(e.contains("last estimates of mu in [-"), "{e}");
+        assert!(e.contains("every estimate is negative"), "{e}");
     }
 
     #[test]

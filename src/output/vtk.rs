@@ -166,6 +166,20 @@ pub fn cylinder_surface(
     len: f64,
     n: usize,
 ) -> (Vec<Vector3<f64>>, Vec<[usize; 4]>) {
+    revolved_surface(c, a, &|_| r, len, n, 1)
+}
+
+/// A surface of revolution about the unit axis `a` through `c`: radius
+/// r(s) at the axial coordinate s ∈ [−len/2, len/2], `n` facets around and
+/// `rings` along (a crowned roll's profile needs more than one).
+pub fn revolved_surface(
+    c: &Vector3<f64>,
+    a: &Vector3<f64>,
+    r: &dyn Fn(f64) -> f64,
+    len: f64,
+    n: usize,
+    rings: usize,
+) -> (Vec<Vector3<f64>>, Vec<[usize; 4]>) {
     let helper = if a[0].abs() < 0.9 {
         Vector3::x()
     } else {
@@ -173,18 +187,48 @@ pub fn cylinder_surface(
     };
     let e1 = a.cross(&helper).normalize();
     let e2 = a.cross(&e1);
-    let mut pts = Vec::with_capacity(2 * n);
+    let stations = rings + 1;
+    let mut pts = Vec::with_capacity(stations * n);
     for k in 0..n {
         let phi = 2.0 * std::f64::consts::PI * k as f64 / n as f64;
-        let radial = (e1 * phi.cos() + e2 * phi.sin()) * r;
-        pts.push(c + radial - a * (0.5 * len));
-        pts.push(c + radial + a * (0.5 * len));
+        let around = e1 * phi.cos() + e2 * phi.sin();
+        for i in 0..stations {
+            let s = len * (i as f64 / rings as f64 - 0.5);
+            pts.push(c + around * r(s) + a * s);
+        }
     }
-    let quads = (0..n)
-        .map(|k| {
-            let j = (k + 1) % n;
-            [2 * k, 2 * j, 2 * j + 1, 2 * k + 1]
-        })
-        .collect();
+    let mut quads = Vec::with_capacity(n * rings);
+    for k in 0..n {
+        let j = (k + 1) % n;
+        for i in 0..rings {
+            let (p, q) = (stations * k + i, stations * j + i);
+            quads.push([p, q, q + 1, p + 1]);
+        }
+    }
     (pts, quads)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every point of a crowned roll's drawing lies at r(s) from the axis,
+    /// at its station s; one ring reproduces the straight cylinder.
+    #[test]
+    fn a_revolved_surface_follows_its_profile() {
+        let c = Vector3::new(1.0, 2.0, 3.0);
+        let a = Vector3::new(0.0, 1.0, 0.0);
+        let r = |s: f64| 0.4 - 2e-3 * s * s;
+        let (pts, quads) = revolved_surface(&c, &a, &r, 2.0, 12, 10);
+        assert_eq!((pts.len(), quads.len()), (12 * 11, 12 * 10));
+        for p in &pts {
+            let s = (p - c).dot(&a);
+            let radial = (p - c - a * s).norm();
+            assert!(s.abs() <= 1.0 + 1e-15);
+            assert!((radial - r(s)).abs() < 1e-15, "s = {s}: {radial}");
+        }
+        let (straight, q) = cylinder_surface(&c, &a, 0.4, 2.0, 12);
+        assert_eq!((straight.len(), q.len()), (24, 12));
+        assert!(q.iter().flatten().all(|&i| i < straight.len()));
+    }
 }

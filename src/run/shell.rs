@@ -14,7 +14,7 @@ use crate::contact::{Obstacle, search};
 use crate::error::{Error, Result};
 use crate::linalg::LinearSolver;
 use crate::output::plot::{Curve, Panel, draw};
-use crate::output::vtk::{cylinder_surface, write_pvd, write_vtu};
+use crate::output::vtk::{cylinder_surface, revolved_surface, write_pvd, write_vtu};
 use crate::output::{Stop, write_csv, write_json};
 use crate::scene::shell::{Branch, Method, ShellScene, load};
 use crate::series::bifurcation::{self, Event};
@@ -645,8 +645,11 @@ fn run_inner(
     let (u_last, lambda_last) = last;
     let full_last = model.expand(&u_last, lambda_last);
     // The final point when it is off the grid (a stop between grid values).
+    // A run that ends at lambda_end may sit past it by its end correction
+    // (within the engine's snap, 1e-9 lambda_end): its grid row is the end.
     let last_row = rec.state.history.last().map(|r| r[0]);
-    if last_row.is_none_or(|l| (l - lambda_last).abs() > 1e-12)
+    let snap = 1e-9 * scene.solver.lambda_end.abs();
+    if last_row.is_none_or(|l| (l - lambda_last).abs() > snap.max(1e-12))
         && matches!(stop, PathStop::End { .. })
     {
         rec.record(
@@ -948,8 +951,14 @@ fn finish_files(rec: &mut Recorder, model: &ShellModel, full: &[f64], lambda: f6
                 centre,
                 axis,
                 radius,
-                ..
-            } => cylinder_surface(centre, axis, *radius, 1.5 * size.min(4.0 * radius), 96),
+                crown,
+            } => {
+                let len = 1.5 * size.min(4.0 * radius);
+                // A crowned roll drawn with its profile r(s) = R − κ s².
+                let rings = if *crown == 0.0 { 1 } else { 40 };
+                let r = |s: f64| radius - crown * s * s;
+                revolved_surface(centre, axis, &r, len, 96, rings)
+            }
             Obstacle::Plane { point, normal } => {
                 cylinder_surface(point, normal, 0.5 * size, 0.0, 4)
             }

@@ -187,13 +187,17 @@ impl PathStep {
         Some(0.5 * (lo + hi))
     }
 
-    /// Whether lambda(a) of the step's polynomial series is monotone over
-    /// [0, length] (sampled at 32 points): false where the step turns back
-    /// through a limit point of lambda.
+    /// Whether lambda(a) of the step's representation (the polynomial, or
+    /// its Padé approximant when the step uses one: the λ(a) that the
+    /// output grid reads) is monotone over [0, length] (sampled at 32
+    /// points): false where the step turns back through a limit point of
+    /// lambda. (Reading the polynomial on a Padé step, whose length can
+    /// exceed the polynomial's range, saw a turn that was not there, and an
+    /// output value at the step's uncorrected end was reported twice.)
     pub fn lambda_is_monotone(&self) -> bool {
         let k = 32;
         let l: Vec<f64> = (0..=k)
-            .map(|i| super::taylor::eval(&self.lambda, self.length * i as f64 / k as f64))
+            .map(|i| self.eval(self.length * i as f64 / k as f64).1)
             .collect();
         l.windows(2).all(|w| w[1] >= w[0]) || l.windows(2).all(|w| w[1] <= w[0])
     }

@@ -163,8 +163,12 @@ pub fn run<P: ContinuationProblem>(
                 lambda + step * dl,
             ),
         };
+        // A predictor or corrector within round-off of the next target has
+        // reached it (else that target would be met again by the next
+        // increment, and reported twice).
+        let snap = 1e-12 * cfg.lambda_scale.max(next.abs());
         let mut hit_target = false;
-        if (lp - next) * forward >= 0.0 {
+        if (lp - next) * forward >= -snap {
             let frac = if (lp - lambda).abs() > 0.0 {
                 (next - lambda) / (lp - lambda)
             } else {
@@ -195,7 +199,7 @@ pub fn run<P: ContinuationProblem>(
         // then solved for by load control from the interpolated point, so
         // that no output is skipped.
         let converged = match converged {
-            Some((un, ln, iterations)) if (ln - next) * forward > 0.0 => {
+            Some((un, ln, iterations)) if !hit_target && (ln - next) * forward > -snap => {
                 let frac = (next - lambda) / (ln - lambda);
                 let start: Vec<f64> = u.iter().zip(&un).map(|(a, b)| a + frac * (b - a)).collect();
                 hit_target = true;

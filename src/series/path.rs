@@ -411,7 +411,12 @@ pub(crate) fn series_step<P: ContinuationProblem + ?Sized>(
     let mut first = true;
     loop {
         let (u_end, mut l_end) = step.eval(step.length);
-        if (l_end - cfg.lambda_end) * forward > 0.0 && (l_end - cfg.lambda_end).abs() < snap {
+        // A step that ends on lambda_end (its length was cut to reach it)
+        // is corrected at that load: the arclength correction could move
+        // its end past lambda_end (1.4e-8 measured on plate-cylinder-coarse,
+        // N = 10, eps 1e-4), and the run would end off its last grid value.
+        let at_end = (l_end - cfg.lambda_end).abs() < snap;
+        if at_end {
             l_end = cfg.lambda_end;
         }
         // Arclength-constrained correction <dŨ, Ũ_1> + dλ̃ λ̃_1 = 0: modified
@@ -429,10 +434,14 @@ pub(crate) fn series_step<P: ContinuationProblem + ?Sized>(
             max_residual: CORRECTABLE,
             step: index,
         };
-        let constraint = Constraint::Arclength {
-            t_u: &step.u[1],
-            t_lambda: step.lambda[1],
-            reference: None,
+        let constraint = if at_end {
+            Constraint::FixedLambda
+        } else {
+            Constraint::Arclength {
+                t_u: &step.u[1],
+                t_lambda: step.lambda[1],
+                reference: None,
+            }
         };
         let attempt = correct::correct(
             problem,

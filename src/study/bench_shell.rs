@@ -320,14 +320,14 @@ pub fn work_precision(
 /// The plate-cylinder targets, read off the table: the fastest ANM
 /// and Newton settings with error <= [`TARGET_ERROR`], their time and
 /// factorization ratios, and the step-cost ratios.
-pub fn targets(rows: &[BenchRow], costs: &[StepCost]) -> String {
+pub fn targets(rows: &[BenchRow], costs: &[StepCost], probe: &str) -> String {
     let best = |newton: bool| {
         rows.iter()
             .filter(|r| r.method.starts_with("Newton") == newton)
             .filter(|r| r.error <= TARGET_ERROR && r.wall_s.is_finite())
             .min_by(|a, b| a.wall_s.total_cmp(&b.wall_s))
     };
-    let mut s = format!("\nTargets at error <= {TARGET_ERROR:.0e} on uz_A:\n\n");
+    let mut s = format!("\nTargets at error <= {TARGET_ERROR:.0e} on {probe}:\n\n");
     match (best(false), best(true)) {
         (Some(a), Some(n)) => {
             s += &format!(

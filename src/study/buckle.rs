@@ -272,11 +272,13 @@ pub fn buckle(
         ..Default::default()
     };
     let (pairs, work) = eigen::pencil(&f0, &|x| k0.mul_vec(x), &|x| ks.mul_vec(x), n, &settings)
-        .map_err(|detail| Error::SingularMatrix {
-            step: path_steps,
-            param: "lambda",
-            at: lambda_base,
-            detail: format!("buckling eigenproblem: {detail}"),
+        .map_err(|detail| Error::Study {
+            study: "buckle",
+            case: match base {
+                Base::Time(t) => format!("base state at t = {t} (lambda = {lambda_base})"),
+                Base::Lambda(_) => format!("base state at lambda = {lambda_base}"),
+            },
+            problem: format!("no buckling mode found: {detail}"),
         })?;
     let mut modes = vec![];
     for (i, p) in pairs.into_iter().enumerate() {

@@ -108,9 +108,7 @@ fn cantilever_moment_scene_rolls_into_a_circle() {
     let r = run("cantilever-moment");
     let mut worst = 0.0f64;
     for lt in [0.25, 0.5, 0.75, 1.0] {
-        let theta = lt * 2.0 * PI;
-        let radius = L / theta;
-        let (xe, ze) = (radius * theta.sin(), radius * (1.0 - theta.cos()));
+        let (xe, ze) = rolled_tip(lt);
         let x = L + r.value_at("ux_tip", lt).unwrap();
         let z = r.value_at("uz_tip", lt).unwrap();
         let err = ((x - xe).powi(2) + (z - ze).powi(2)).sqrt() / L;
@@ -119,6 +117,75 @@ fn cantilever_moment_scene_rolls_into_a_circle() {
     }
     println!("{} steps", r.steps);
     assert!(worst <= 0.005, "tip position error {worst:.3e} L > 0.5%");
+}
+
+/// The tip of the rolled cantilever at M/M_max = lt (closed form, nu = 0).
+fn rolled_tip(lt: f64) -> (f64, f64) {
+    let theta = lt * 2.0 * PI;
+    let radius = L / theta;
+    (radius * theta.sin(), radius * (1.0 - theta.cos()))
+}
+
+/// history.csv holds each output grid value once, in order, and nothing
+/// else: a Newton increment that lands on a grid value by round-off (0.05
+/// increments summed) used to report it twice; so did a Padé step whose
+/// polynomial (read beyond its range) seemed to turn back, on
+/// plate-cylinder-coarse at N = 20, eps 1e-6; and an ANM run whose end
+/// correction passed lambda_end by 1.9e-11 added a row after lambda = 1.
+/// The cantilevers stay on the closed form (the meshes' 0.17% / 0.08% of L).
+#[test]
+fn every_grid_value_is_reported_once_by_newton_and_the_anm() {
+    use anm::scene::shell::Method;
+    use anm::series::newton::{Control, NewtonConfig};
+    let load = |name: &str| {
+        let path = format!("{}/scenes/{name}.toml", env!("CARGO_MANIFEST_DIR"));
+        anm::scene::shell::load(std::path::Path::new(&path)).unwrap()
+    };
+    let mut newton = load("verification/cantilever-moment");
+    newton.output.lambda_step = 0.05;
+    newton.method = Method::Newton(NewtonConfig {
+        control: Control::Load,
+        max_step: 0.05,
+        tol: 1e-4,
+        lambda_end: 1.0,
+        ..Default::default()
+    });
+    let mut fine = load("cantilever-moment-fine");
+    fine.solver.order = 10;
+    fine.solver.eps = 1e-6;
+    let mut contact = load("plate-cylinder-coarse");
+    contact.output.lambda_step = 0.05;
+    contact.output.vtk_every = 0;
+    contact.solver.order = 20;
+    contact.solver.eps = 1e-6;
+    contact.solver.pade = true;
+    for (what, scene, tip_tol) in [
+        ("Newton, cantilever 80 x 1", newton, Some(2e-3)),
+        ("ANM, cantilever 216 x 4", fine, Some(1e-3)),
+        ("ANM Padé, plate-cylinder-coarse", contact, None),
+    ] {
+        let r = run_loaded(&scene, None, false).unwrap();
+        assert_eq!(r.stop.reason, "end", "{what}");
+        let lambdas: Vec<f64> = r.history.iter().map(|row| row[0]).collect();
+        let grid: Vec<f64> = (0..=20).map(|i| i as f64 * 0.05).collect();
+        assert_eq!(lambdas.len(), grid.len(), "{what}: rows at {lambdas:?}");
+        for (l, g) in lambdas.iter().zip(&grid) {
+            assert!((l - g).abs() < 1e-12, "{what}: row at {l} for grid {g}");
+        }
+        let Some(tol) = tip_tol else {
+            println!("{what}: {} steps", r.steps);
+            continue;
+        };
+        let mut worst = 0.0f64;
+        for g in grid.iter().filter(|g| **g > 0.0) {
+            let (xe, ze) = rolled_tip(*g);
+            let x = L + r.value_at("ux_tip", *g).unwrap();
+            let z = r.value_at("uz_tip", *g).unwrap();
+            worst = worst.max(((x - xe).powi(2) + (z - ze).powi(2)).sqrt() / L);
+        }
+        println!("{what}: {} steps, tip error {worst:.2e} L", r.steps);
+        assert!(worst <= tol, "{what}: tip error {worst:.3e} L > {tol:e}");
+    }
 }
 
 #[test]
