@@ -241,7 +241,7 @@ fn grid_points(
     }
     // Turning back: the range of lambda over the step, every crossing.
     let samples: Vec<f64> = (0..=32)
-        .map(|i| step.eval(step.length * i as f64 / 32.0).1)
+        .map(|i| step.lambda_at(step.length * i as f64 / 32.0))
         .collect();
     let lo = samples.iter().copied().fold(f64::INFINITY, f64::min);
     let hi = samples.iter().copied().fold(f64::NEG_INFINITY, f64::max);

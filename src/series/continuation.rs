@@ -142,11 +142,17 @@ impl PathStep {
     pub fn eval(&self, a: f64) -> (Vec<f64>, f64) {
         match &self.pade {
             Some(p) => {
-                let terms = stack_terms(&self.u, &self.lambda);
-                let inc = p.eval(&terms, a);
-                let n = self.u[0].len();
+                // sum_k f_k(a) U_k term by term (no stacked copy of the
+                // terms: at 1e6 unknowns that copy was 128 MB per call).
+                let w = p.weights(a);
+                let mut inc = vec![0.0; self.u[0].len()];
+                for (f, t) in w.iter().zip(&self.u[1..]) {
+                    for (o, t) in inc.iter_mut().zip(t) {
+                        *o += f * t;
+                    }
+                }
                 let u = self.u[0].iter().zip(&inc).map(|(x, d)| x + d).collect();
-                (u, self.lambda[0] + inc[n])
+                (u, self.lambda_at(a))
             }
             None => {
                 let n = self.u[0].len();
@@ -159,15 +165,27 @@ impl PathStep {
         }
     }
 
+    /// lambda(a) alone, from the step's representation (polynomial or
+    /// Padé): O(N), whatever the number of unknowns.
+    pub fn lambda_at(&self, a: f64) -> f64 {
+        match &self.pade {
+            Some(p) => {
+                let inc = p
+                    .weights(a)
+                    .iter()
+                    .zip(&self.lambda[1..])
+                    .fold(0.0, |s, (f, l)| s + f * l);
+                self.lambda[0] + inc
+            }
+            None => super::taylor::eval(&self.lambda, a),
+        }
+    }
+
     /// Path parameter a at which lambda(a) = target, if it lies in [0, length]
     /// (Newton on the series, started by bisection-safe bracketing).
     pub fn a_at_lambda(&self, target: f64) -> Option<f64> {
-        // lambda alone where the representation allows (the polynomial):
-        // bisection evaluates it 100 times.
-        let f = |a: f64| match &self.pade {
-            Some(_) => self.eval(a).1 - target,
-            None => super::taylor::eval(&self.lambda, a) - target,
-        };
+        // lambda alone: bisection evaluates it 100 times.
+        let f = |a: f64| self.lambda_at(a) - target;
         let (f0, f1) = (f(0.0), f(self.length));
         if f0 == 0.0 {
             return Some(0.0);
@@ -197,7 +215,7 @@ impl PathStep {
     pub fn lambda_is_monotone(&self) -> bool {
         let k = 32;
         let l: Vec<f64> = (0..=k)
-            .map(|i| self.eval(self.length * i as f64 / k as f64).1)
+            .map(|i| self.lambda_at(self.length * i as f64 / k as f64))
             .collect();
         l.windows(2).all(|w| w[1] >= w[0]) || l.windows(2).all(|w| w[1] <= w[0])
     }
@@ -206,7 +224,7 @@ impl PathStep {
     /// the states at a lambda on a step that turns back through a limit
     /// point (32 samples, bisection on each sign change).
     pub fn a_at_lambda_all(&self, target: f64) -> Vec<f64> {
-        let f = |a: f64| self.eval(a).1 - target;
+        let f = |a: f64| self.lambda_at(a) - target;
         let k = 32;
         let mut out = vec![];
         let mut a0 = 0.0;
@@ -233,17 +251,6 @@ impl PathStep {
         }
         out
     }
-}
-
-pub(crate) fn stack_terms(u: &[Vec<f64>], lambda: &[f64]) -> Vec<Vec<f64>> {
-    u.iter()
-        .zip(lambda)
-        .map(|(up, &lp)| {
-            let mut t = up.clone();
-            t.push(lp);
-            t
-        })
-        .collect()
 }
 
 /// Result of a continuation run.

@@ -101,16 +101,26 @@ impl Pade {
         out
     }
 
-    /// The increment W(a) - W_0.
-    pub fn eval(&self, terms: &[Vec<f64>], a: f64) -> Vec<f64> {
+    /// The weights f_k(a) = a^k D_{m-k}(a) / D_m(a), k = 1..=m, of the
+    /// increment W(a) - W_0 = sum_k f_k(a) W_k: the approximant is linear
+    /// in the terms, so one component (lambda) costs m products.
+    pub fn weights(&self, a: f64) -> Vec<f64> {
         let m = self.d.len();
         let dens = self.denominators(a);
-        let mut out = vec![0.0; terms[1].len()];
         let mut ak = 1.0;
-        for k in 1..=m {
-            ak *= a;
-            let f = ak * dens[m - k] / dens[m];
-            for (o, t) in out.iter_mut().zip(&terms[k]) {
+        (1..=m)
+            .map(|k| {
+                ak *= a;
+                ak * dens[m - k] / dens[m]
+            })
+            .collect()
+    }
+
+    /// The increment W(a) - W_0.
+    pub fn eval(&self, terms: &[Vec<f64>], a: f64) -> Vec<f64> {
+        let mut out = vec![0.0; terms[1].len()];
+        for (f, t) in self.weights(a).iter().zip(&terms[1..]) {
+            for (o, t) in out.iter_mut().zip(t) {
                 *o += f * t;
             }
         }
