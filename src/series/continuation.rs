@@ -142,15 +142,9 @@ impl PathStep {
     pub fn eval(&self, a: f64) -> (Vec<f64>, f64) {
         match &self.pade {
             Some(p) => {
-                // sum_k f_k(a) U_k term by term (no stacked copy of the
-                // terms: at 1e6 unknowns that copy was 128 MB per call).
-                let w = p.weights(a);
-                let mut inc = vec![0.0; self.u[0].len()];
-                for (f, t) in w.iter().zip(&self.u[1..]) {
-                    for (o, t) in inc.iter_mut().zip(t) {
-                        *o += f * t;
-                    }
-                }
+                // The Padé weights apply to U and lambda apart (no stacked
+                // copy of the terms: 128 MB per call at 1e6 unknowns).
+                let inc = p.eval(&self.u, a);
                 let u = self.u[0].iter().zip(&inc).map(|(x, d)| x + d).collect();
                 (u, self.lambda_at(a))
             }
