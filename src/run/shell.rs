@@ -645,11 +645,10 @@ fn run_inner(
     let (u_last, lambda_last) = last;
     let full_last = model.expand(&u_last, lambda_last);
     // The final point when it is off the grid (a stop between grid values).
-    // A run that ends at lambda_end may sit past it by its end correction
-    // (within the engine's snap, 1e-9 lambda_end): its grid row is the end.
+    // (A run that reaches lambda_end ends on it exactly: the engine
+    // corrects its last step at that load.)
     let last_row = rec.state.history.last().map(|r| r[0]);
-    let snap = 1e-9 * scene.solver.lambda_end.abs();
-    if last_row.is_none_or(|l| (l - lambda_last).abs() > snap.max(1e-12))
+    if last_row.is_none_or(|l| (l - lambda_last).abs() > 1e-12)
         && matches!(stop, PathStop::End { .. })
     {
         rec.record(

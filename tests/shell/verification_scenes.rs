@@ -5,15 +5,17 @@
 //! shell_nonlinear_cantilevers.rs, contact_propped_cantilever.rs).
 
 use anm::run::{RunReport, run_loaded};
+use anm::scene::shell::ShellScene;
 use std::f64::consts::PI;
 
+/// A scene of scenes/, by its path there without the extension.
+fn scene(rel: &str) -> ShellScene {
+    let path = format!("{}/scenes/{rel}.toml", env!("CARGO_MANIFEST_DIR"));
+    anm::scene::shell::load(std::path::Path::new(&path)).unwrap_or_else(|e| panic!("{rel}: {e}"))
+}
+
 fn run(name: &str) -> RunReport {
-    let path = format!(
-        "{}/scenes/verification/{name}.toml",
-        env!("CARGO_MANIFEST_DIR")
-    );
-    let scene = anm::scene::shell::load(std::path::Path::new(&path))
-        .unwrap_or_else(|e| panic!("{name}: {e}"));
+    let scene = scene(&format!("verification/{name}"));
     let r = run_loaded(&scene, None, false).unwrap_or_else(|e| panic!("{name}: {e}"));
     assert_eq!(r.stop.reason, "end", "{name}: {:?}", r.stop);
     r
@@ -137,11 +139,7 @@ fn rolled_tip(lt: f64) -> (f64, f64) {
 fn every_grid_value_is_reported_once_by_newton_and_the_anm() {
     use anm::scene::shell::Method;
     use anm::series::newton::{Control, NewtonConfig};
-    let load = |name: &str| {
-        let path = format!("{}/scenes/{name}.toml", env!("CARGO_MANIFEST_DIR"));
-        anm::scene::shell::load(std::path::Path::new(&path)).unwrap()
-    };
-    let mut newton = load("verification/cantilever-moment");
+    let mut newton = scene("verification/cantilever-moment");
     newton.output.lambda_step = 0.05;
     newton.method = Method::Newton(NewtonConfig {
         control: Control::Load,
@@ -150,21 +148,21 @@ fn every_grid_value_is_reported_once_by_newton_and_the_anm() {
         lambda_end: 1.0,
         ..Default::default()
     });
-    let mut fine = load("cantilever-moment-fine");
+    let mut fine = scene("cantilever-moment-fine");
     fine.solver.order = 10;
     fine.solver.eps = 1e-6;
-    let mut contact = load("plate-cylinder-coarse");
+    let mut contact = scene("plate-cylinder-coarse");
     contact.output.lambda_step = 0.05;
     contact.output.vtk_every = 0;
     contact.solver.order = 20;
     contact.solver.eps = 1e-6;
     contact.solver.pade = true;
-    for (what, scene, tip_tol) in [
+    for (what, sc, tip_tol) in [
         ("Newton, cantilever 80 x 1", newton, Some(2e-3)),
         ("ANM, cantilever 216 x 4", fine, Some(1e-3)),
         ("ANM Padé, plate-cylinder-coarse", contact, None),
     ] {
-        let r = run_loaded(&scene, None, false).unwrap();
+        let r = run_loaded(&sc, None, false).unwrap();
         assert_eq!(r.stop.reason, "end", "{what}");
         let lambdas: Vec<f64> = r.history.iter().map(|row| row[0]).collect();
         let grid: Vec<f64> = (0..=20).map(|i| i as f64 * 0.05).collect();
