@@ -1,7 +1,9 @@
-//! Cost of one element's series over an ANM step (start, then per order the
-//! completion and the right-hand side; the tangent once), in isolation from
-//! assembly and solves: `cargo run --release --example element_series_kernel`.
-//! Prints nanoseconds per element-step.
+//! Cost of the element series over an ANM step (start, then per order the
+//! completion and the next right-hand side; the tangent once), in isolation
+//! from assembly and solves, for one element in cache and for the 16,000
+//! elements of the 400×40 strip streamed through memory:
+//! `cargo run --release --example element_series_kernel`. Prints
+//! nanoseconds per element-step.
 
 use anm::shell::kinematics::Vec3;
 use anm::shell::series::ElementSeries;
@@ -26,37 +28,55 @@ fn main() {
         young: 2e11,
         poisson: 0.3,
     };
-    let e = ShellElement::new(0, [0, 1, 2, 3], &x, &d, 0.01, &material).expect("element");
     let order = 15;
-    let reps = 20_000;
     let incr = |p: usize, k: usize| {
         Vec3::from_fn(|i, _| 1e-3 * ((p * 7 + k * 3 + i) as f64).sin() / p as f64)
     };
-    let mut checksum = 0.0;
-    let (mut t_start, mut t_tangent, mut t_orders) = (0.0, 0.0, 0.0);
-    for _ in 0..reps {
-        let t = Instant::now();
-        let mut st = ElementSeries::start(&e, &x, &d);
-        t_start += t.elapsed().as_secs_f64();
-        let t = Instant::now();
-        checksum += st.tangent(&e)[(0, 0)];
-        t_tangent += t.elapsed().as_secs_f64();
-        let t = Instant::now();
-        for p in 1..=order {
-            let xs = std::array::from_fn(|k| incr(p, k));
-            let ds = std::array::from_fn(|k| incr(p, k + 4));
-            st.complete(&e, &xs, &ds);
-            if p < order {
-                checksum += st.rhs(&e)[3];
+    // One element many times (its data stay in cache), then the elements
+    // of the 400×40 strip (16,000: every order streams all of them through
+    // memory, as a run does), one thread.
+    for (count, reps) in [(1usize, 20_000usize), (16_000, 2)] {
+        let elements: Vec<ShellElement> = (0..count)
+            .map(|i| {
+                let shift = Vec3::new(0.1 * i as f64, 0.0, 0.0);
+                let xi = x.map(|v| v + shift);
+                ShellElement::new(i, [0, 1, 2, 3], &xi, &d, 0.01, &material).expect("element")
+            })
+            .collect();
+        let mut checksum = 0.0;
+        let (mut t_start, mut t_tangent, mut t_orders) = (0.0, 0.0, 0.0);
+        for _ in 0..reps {
+            let t = Instant::now();
+            let mut series: Vec<ElementSeries> = elements
+                .iter()
+                .map(|e| ElementSeries::start(e, &x, &d))
+                .collect();
+            t_start += t.elapsed().as_secs_f64();
+            let t = Instant::now();
+            for (e, st) in elements.iter().zip(&series) {
+                checksum += st.tangent(e)[(0, 0)];
             }
+            t_tangent += t.elapsed().as_secs_f64();
+            let t = Instant::now();
+            // Orders 1 … N − 1 completed, each with the next right-hand
+            // side (ShellModel::series_rhs), as in a step of order N.
+            for p in 1..order {
+                let xs = std::array::from_fn(|k| incr(p, k));
+                let ds = std::array::from_fn(|k| incr(p, k + 4));
+                for (e, st) in elements.iter().zip(&mut series) {
+                    checksum += st.complete_and_rhs(e, &xs, &ds)[3];
+                }
+            }
+            t_orders += t.elapsed().as_secs_f64();
         }
-        t_orders += t.elapsed().as_secs_f64();
+        let ns = |s: f64| 1e9 * s / (reps * count) as f64;
+        println!(
+            "{count} element(s), per element-step: start {:.0} ns, tangent {:.0} ns, {} orders {:.0} ns ({:.0} ns per order; checksum {checksum:.6e})",
+            ns(t_start),
+            ns(t_tangent),
+            order - 1,
+            ns(t_orders),
+            ns(t_orders) / (order - 1) as f64
+        );
     }
-    let ns = |s: f64| 1e9 * s / reps as f64;
-    println!(
-        "per element-step: start {:.0} ns, tangent {:.0} ns, {order} orders {:.0} ns (checksum {checksum:.6e})",
-        ns(t_start),
-        ns(t_tangent),
-        ns(t_orders)
-    );
 }

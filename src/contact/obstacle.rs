@@ -200,6 +200,18 @@ impl GapSeries {
         self.h.len()
     }
 
+    /// Room for `orders` orders in every coefficient list, so that
+    /// completing them allocates nothing.
+    pub fn reserve(&mut self, orders: usize) {
+        let more = orders.saturating_sub(self.orders());
+        for list in self.y.iter_mut().chain(self.n.iter_mut()) {
+            list.reserve(more);
+        }
+        for list in [&mut self.d2, &mut self.d, &mut self.s, &mut self.h] {
+            list.reserve(more);
+        }
+    }
+
     fn push_y(&mut self, y: &Vec3) {
         for k in 0..3 {
             self.y[k].push(y[k]);

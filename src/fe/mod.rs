@@ -12,6 +12,7 @@
 pub mod dof;
 pub mod edge_load;
 pub mod pattern;
+pub mod prefetch;
 pub mod surface_load;
 
 pub use crate::mesh::Vec3;

@@ -214,6 +214,20 @@ impl SparseMatrix {
         }
     }
 
+    /// Adds `values` to the consecutive slots from `slot` of the pattern
+    /// (positions precomputed by the assembler, fe::pattern::element_slots).
+    /// Panics without a pattern or past its end: a wrong slot is a bug of
+    /// the caller, not a position to keep aside.
+    pub fn add_at_slots(&mut self, slot: usize, values: &[f64]) {
+        assert!(self.structure.is_some(), "add_at_slots needs a pattern");
+        for (v, &x) in self.values[slot..slot + values.len()]
+            .iter_mut()
+            .zip(values)
+        {
+            *v += x;
+        }
+    }
+
     /// A dense row-major matrix as sparse (small problems and tests).
     pub fn from_dense(rows: &[Vec<f64>]) -> Self {
         let mut m = Self::new(rows.len());

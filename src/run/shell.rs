@@ -46,6 +46,10 @@ pub struct RunReport {
     pub solves: usize,
     pub corrections: usize,
     pub wall_s: f64,
+    /// Wall time of the continuation loop alone (this process): the steps
+    /// with their grid points, events and per-step outputs, without the
+    /// model set-up before it and the final outputs after it.
+    pub path_s: f64,
     pub stats: Stats,
     pub step_cost: StepCost,
     pub stop: Stop,
@@ -334,6 +338,7 @@ fn run_inner(
     let far_skipped = model.search_distance.is_finite() && !model.pairs.is_empty();
     let method_name;
     let mut event_factorizations = 0;
+    let path_start = Instant::now();
     let (stop, stats, last): (PathStop, Stats, (Vec<f64>, f64)) = match &scene.method {
         Method::Anm => {
             method_name = "anm";
@@ -639,6 +644,7 @@ fn run_inner(
             (PathStop::End { lambda: l_end }, stats, (u, l_end))
         }
     };
+    let path_s = path_start.elapsed().as_secs_f64();
     if let Some(b) = &bar {
         b.finish();
     }
@@ -705,6 +711,7 @@ fn run_inner(
         solves: stats.solves + grid_stats.solves,
         corrections: stats.corrections,
         wall_s: wall_before + start.elapsed().as_secs_f64(),
+        path_s,
         step_cost: StepCost::new(&stats, cfg.order),
         stats: stats.clone(),
         stop: stop_out,

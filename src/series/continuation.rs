@@ -51,6 +51,10 @@ pub trait ContinuationProblem {
     fn events(&self, _u: &[f64], _lambda: f64) -> Result<Vec<f64>> {
         Ok(vec![])
     }
+    /// The number of series orders (N + 1) the steps will compute, told
+    /// before each step's tangent: a problem may size its series buffers
+    /// once instead of growing them order by order (default: ignored).
+    fn reserve_orders(&mut self, _orders: usize) {}
 }
 
 /// Numerical settings of a continuation run.

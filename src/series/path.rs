@@ -178,7 +178,8 @@ impl<'p, P: ContinuationProblem> Path<'p, P> {
             self.stopped = Some(s.clone());
             return Err(s);
         }
-        match series_step(
+        let start = Instant::now();
+        let result = series_step(
             &mut *self.problem,
             &self.u,
             self.lambda,
@@ -190,7 +191,9 @@ impl<'p, P: ContinuationProblem> Path<'p, P> {
             self.forward,
             &mut self.lu,
             &mut self.stats,
-        ) {
+        );
+        charge(&mut self.stats.step_s, start);
+        match result {
             Ok(step) => {
                 self.stats.steps += 1;
                 self.index += 1;
@@ -272,6 +275,7 @@ pub(crate) fn series_step<P: ContinuationProblem + ?Sized>(
     stats: &mut Stats,
 ) -> Result<PathStep> {
     let n_ord = cfg.order;
+    problem.reserve_orders(n_ord + 1);
     let t = Instant::now();
     let (kt, r_lambda) = problem.tangent(u0, lambda0)?;
     charge(&mut stats.assembly_s, t);

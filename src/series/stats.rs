@@ -27,6 +27,11 @@ pub struct Stats {
     /// a clock read there costs as much as a 4x4 solve.
     pub solve_s: f64,
     pub series_s: f64,
+    /// Seconds in the continuation engine's steps as a whole (tangent,
+    /// factorization, solves, series, step length, end check, retries):
+    /// what a step costs without the run's outputs and event checks.
+    #[serde(default)]
+    pub step_s: f64,
     /// The linear solver: factorizations per backend, hand-overs, largest
     /// backward error, factor size, last inertia.
     #[serde(default)]

@@ -31,6 +31,7 @@
 
 use nalgebra::{Matrix3, SMatrix};
 
+use super::geometric_map::GeometricMap;
 use super::kinematics::{
     NCOL, NDOF_EL, NDOF_Y, NSTRAIN, NSYM, NodalVectors, PackedSym, Point, PointVectors, SYM_INDEX,
     SYM_PAIRS, Strain, Sym, Vec3, pack, strain,
@@ -43,7 +44,8 @@ pub const NEAS: usize = 5;
 type GMatrix = SMatrix<f64, NSTRAIN, NEAS>;
 pub type ElementMatrix = SMatrix<f64, NDOF_EL, NDOF_EL>;
 
-type GeometricMap = SMatrix<f64, NSYM, NSYM>;
+/// The full map K on packed matrices (GeometricMap stores it as S P).
+type FullMap = SMatrix<f64, NSYM, NSYM>;
 /// Packed Kg of the Gram change YᵀδY + δYᵀY, per unknown of Y.
 pub type GramJacobian = SMatrix<f64, NSYM, NDOF_Y>;
 
@@ -135,7 +137,7 @@ pub struct ShellElement {
     /// Thickness moments (t, t³/12) of the material matrix.
     moments: (f64, f64),
     /// The linear map M ↦ Kg(σ(E(M))) on packed symmetric matrices (see
-    /// [`ShellElement::packed_geometric`]).
+    /// [`ShellElement::packed_geometric`]), stored symmetric.
     kmap: Box<GeometricMap>,
 }
 
@@ -237,16 +239,16 @@ impl ShellElement {
             gps,
             hinv,
             moments: (thickness, thickness * thickness * thickness / 12.0),
-            kmap: Box::new(GeometricMap::zeros()),
+            kmap: Box::new(GeometricMap::from_full(&FullMap::zeros())),
         };
-        el.kmap = el.geometric_map();
+        el.kmap = Box::new(GeometricMap::from_full(&el.geometric_map()));
         Ok(el)
     }
 
     /// Column k: Kg(σ(E(M))) for M the k-th unit symmetric matrix, through
     /// the same ANS, EAS and stress path as [`ShellElement::internal`].
-    fn geometric_map(&self) -> Box<GeometricMap> {
-        let mut map = Box::new(GeometricMap::zeros());
+    fn geometric_map(&self) -> FullMap {
+        let mut map = FullMap::zeros();
         for (k, &(a, b)) in SYM_PAIRS.iter().enumerate() {
             let mut m = Sym::zeros();
             m[(a, b)] = 1.0;
@@ -273,7 +275,18 @@ impl ShellElement {
     /// coefficient Σ_r Y_rᵀY_(p−r), Y_0 Kg_p + … is the order-p internal
     /// force on Y (B(x)ᵀσ = Y Kg(σ)).
     pub fn packed_geometric(&self, m: &PackedSym) -> PackedSym {
-        self.kmap.as_ref() * m
+        self.kmap.apply(m)
+    }
+
+    /// Prefetches the map (fe::prefetch).
+    pub fn prefetch_map(&self) {
+        self.kmap.prefetch();
+    }
+
+    /// [`ShellElement::packed_geometric`] of two matrices, reading the map
+    /// once.
+    pub fn packed_geometric_pair(&self, a: &PackedSym, b: &PackedSym) -> (PackedSym, PackedSym) {
+        self.kmap.apply_pair(a, b)
     }
 
     /// Kg(σ) of the stresses at the state (x, d), computed pointwise from
@@ -361,6 +374,7 @@ impl ShellElement {
     /// The column of the unknown (dim, b) has YᵀδY + δYᵀY nonzero in row
     /// and column b only, so it sums 7 of the 28 columns of K.
     pub fn gram_jacobian(&self, y: &NodalVectors) -> GramJacobian {
+        let kmap = self.kmap.full();
         let mut t = GramJacobian::zeros();
         for b in 0..NCOL {
             for dim in 0..3 {
@@ -372,11 +386,68 @@ impl ShellElement {
                     } else {
                         y[(dim, a)]
                     };
-                    col.axpy(w, &self.kmap.column(SYM_INDEX[a][b]), 1.0);
+                    col.axpy(w, &kmap.column(SYM_INDEX[a][b]), 1.0);
                 }
                 t.set_column(3 * b + dim, &col);
             }
         }
         t
+    }
+}
+
+#[cfg(test)]
+pub(crate) mod tests {
+    use super::*;
+
+    /// A curved, distorted element far from the origin.
+    pub(crate) fn element() -> (ShellElement, [Vec3; 4], [Vec3; 4]) {
+        let far = Vec3::new(40.0, -25.0, 10.0);
+        let x = [
+            Vec3::new(0.0, 0.0, 0.0),
+            Vec3::new(0.11, 0.01, 0.02),
+            Vec3::new(0.12, 0.09, 0.01),
+            Vec3::new(-0.01, 0.1, 0.03),
+        ]
+        .map(|v| v + far);
+        let d = [
+            Vec3::new(0.1, 0.0, 1.0),
+            Vec3::new(-0.1, 0.05, 1.0),
+            Vec3::new(0.0, -0.1, 1.0),
+            Vec3::new(0.05, 0.05, 1.0),
+        ]
+        .map(|v| v.normalize());
+        let material = Material {
+            young: 2e5,
+            poisson: 0.3,
+        };
+        let e = ShellElement::new(0, [0, 1, 2, 3], &x, &d, 0.01, &material).unwrap();
+        (e, x, d)
+    }
+
+    /// The map K on packed matrices is S times a symmetric matrix (the
+    /// premise of GeometricMap's storage), on a curved, distorted element.
+    #[test]
+    fn geometric_map_is_symmetric_up_to_the_packing_weights() {
+        let (e, _, _) = element();
+        let k = e.geometric_map();
+        let s = |i: usize| {
+            if SYM_PAIRS[i].0 == SYM_PAIRS[i].1 {
+                2.0
+            } else {
+                1.0
+            }
+        };
+        let scale = k.abs().max();
+        for i in 0..NSYM {
+            for j in 0..NSYM {
+                let asym = (k[(i, j)] / s(i) - k[(j, i)] / s(j)).abs();
+                assert!(
+                    asym <= 1e-14 * scale,
+                    "K[{i},{j}]: asymmetry {asym:.3e} of {scale:.3e}"
+                );
+            }
+        }
+        let stored = GeometricMap::from_full(&k).full();
+        assert!((stored - k).abs().max() <= 1e-14 * scale);
     }
 }

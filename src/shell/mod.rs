@@ -7,6 +7,7 @@ pub mod chart;
 pub mod element;
 pub mod friction_dae;
 pub mod friction_pair;
+pub mod geometric_map;
 pub mod implicit_step;
 pub mod kinematics;
 pub mod material;

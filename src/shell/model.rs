@@ -41,7 +41,7 @@ use crate::contact::obstacle::{GapSeries, Obstacle};
 use crate::contact::search::{self, ContactPair};
 use crate::error::{Error, Result};
 use crate::fe::dof::{Dof, PER_NODE, index as dof};
-use crate::fe::pattern::node_block_structure;
+use crate::fe::pattern::{ElementSlots, NO_SLOT, element_slots, node_block_structure};
 use crate::fe::surface_load;
 use crate::linalg::{SparseMatrix, Structure};
 use rayon::prelude::*;
@@ -116,8 +116,14 @@ pub struct ShellModel {
     el_series: Vec<ElementSeries>,
     pair_series: Vec<PairSeries>,
     /// The tangent's pattern (element connectivity of the free dofs), built
-    /// on the first tangent after the constraints are set.
+    /// on the first tangent after the constraints are set, with each
+    /// element's slots in it (empty if they do not fit 32 bits).
     structure: Option<Arc<Structure>>,
+    slots: Vec<ElementSlots>,
+    /// Series orders a step computes (ContinuationProblem::reserve_orders):
+    /// the series buffers are sized for them at the step start, so that
+    /// the parallel order loops allocate nothing.
+    orders: usize,
 }
 
 impl ShellModel {
@@ -158,6 +164,8 @@ impl ShellModel {
             el_series: vec![],
             pair_series: vec![],
             structure: None,
+            slots: Vec::new(),
+            orders: 0,
         };
         m.set_constraints(&[]);
         Ok(m)
@@ -180,6 +188,7 @@ impl ShellModel {
         }
         self.ndof = next;
         self.structure = None;
+        self.slots.clear();
     }
 
     /// Values per unit lambda of the fixed dofs (full vector; entries at
@@ -522,6 +531,7 @@ impl ShellModel {
     fn scatter_element(
         &self,
         e: &ShellElement,
+        slots: Option<&ElementSlots>,
         ke: &ElementMatrix,
         k: &mut SparseMatrix,
         rl: &mut [f64],
@@ -548,7 +558,12 @@ impl ShellModel {
                             idx[m] = i;
                             vals[m] = ke[(la, b)];
                         }
-                        k.add_sorted_rows(&idx[..run.len()], j, &vals[..run.len()]);
+                        match slots.map(|s| s[b][a]) {
+                            Some(slot) if slot != NO_SLOT => {
+                                k.add_at_slots(slot as usize, &vals[..run.len()])
+                            }
+                            _ => k.add_sorted_rows(&idx[..run.len()], j, &vals[..run.len()]),
+                        }
                     }
                 }
                 None => {
@@ -570,27 +585,44 @@ impl ShellModel {
         self.series_u0 = u0.to_vec();
         self.series_lambda0 = lambda0;
         let obstacles = self.obstacles_at(lambda0);
-        self.el_series = self
-            .elements
-            .par_iter()
-            .with_min_len(PAR_MIN)
-            .map(|e| {
-                let (x, d) = self.element_state(e, &full, false);
-                ElementSeries::start(e, &x, &d)
-            })
-            .collect();
+        if self.el_series.len() == self.elements.len() {
+            // Restarted in place: the last step's buffers are reused (no
+            // allocation and release per element and step).
+            let mut series = std::mem::take(&mut self.el_series);
+            series
+                .par_iter_mut()
+                .zip(self.elements.par_iter())
+                .with_min_len(PAR_MIN)
+                .for_each(|(st, e)| {
+                    let (x, d) = self.element_state(e, &full, false);
+                    st.restart(e, &x, &d);
+                    st.reserve(self.orders);
+                });
+            self.el_series = series;
+        } else {
+            self.el_series = self
+                .elements
+                .par_iter()
+                .with_min_len(PAR_MIN)
+                .map(|e| {
+                    let (x, d) = self.element_state(e, &full, false);
+                    let mut st = ElementSeries::start(e, &x, &d);
+                    st.reserve(self.orders);
+                    st
+                })
+                .collect();
+        }
         let mut ps = Vec::with_capacity(self.active.len());
         for &ip in &self.active {
             let pair = &self.pairs[ip];
             let x = self.x0[pair.node] + Self::vec3(&full, pair.node, 0);
-            let gap = GapSeries::start(&obstacles[pair.obstacle], &x)
+            let mut gap = GapSeries::start(&obstacles[pair.obstacle], &x)
                 .ok_or_else(|| self.gap_error(pair.node, f64::NAN))?;
-            let r0 = pair.law.force(gap.h[0]);
-            ps.push(PairSeries {
-                pair: ip,
-                gap,
-                r: vec![r0],
-            });
+            // One order more: the right-hand side pushes its starred term.
+            gap.reserve(self.orders + 1);
+            let mut r = Vec::with_capacity(self.orders + 1);
+            r.push(pair.law.force(gap.h[0]));
+            ps.push(PairSeries { pair: ip, gap, r });
         }
         self.pair_series = ps;
         Ok(())
@@ -606,18 +638,35 @@ impl ShellModel {
             .zip(self.el_series.par_iter_mut())
             .with_min_len(PAR_MIN)
             .for_each(|(e, st)| {
-                let x = std::array::from_fn(|i| Self::vec3(&full, e.nodes[i], 0));
-                let d = std::array::from_fn(|i| Self::vec3(&full, e.nodes[i], 3));
+                let (x, d) = Self::element_coefficients(e, &full);
                 st.complete(e, &x, &d);
             });
-        for ps in &mut self.pair_series {
-            let pair = &self.pairs[ps.pair];
-            let m = ps.gap.orders();
-            let v = self.motions[pair.obstacle].velocity();
-            ps.gap.complete(&(Self::vec3(&full, pair.node, 0) - v * lm));
-            let rm = pair.law.force_coeff(&ps.r, &ps.gap.h, m);
-            ps.r.push(rm);
-        }
+        self.complete_pairs(&full, lm);
+    }
+
+    /// The order-m nodal positions and directors of element `e` from the
+    /// full order-m vector.
+    fn element_coefficients(e: &ShellElement, full: &[f64]) -> ([Vec3; 4], [Vec3; 4]) {
+        (
+            std::array::from_fn(|i| Self::vec3(full, e.nodes[i], 0)),
+            std::array::from_fn(|i| Self::vec3(full, e.nodes[i], 3)),
+        )
+    }
+
+    /// The contact pairs' part of [`ShellModel::complete_order`].
+    fn complete_pairs(&mut self, full: &[f64], lm: f64) {
+        let (pairs, motions) = (&self.pairs, &self.motions);
+        self.pair_series
+            .par_iter_mut()
+            .with_min_len(PAR_MIN)
+            .for_each(|ps| {
+                let pair = &pairs[ps.pair];
+                let m = ps.gap.orders();
+                let v = motions[pair.obstacle].velocity();
+                ps.gap.complete(&(Self::vec3(full, pair.node, 0) - v * lm));
+                let rm = pair.law.force_coeff(&ps.r, &ps.gap.h, m);
+                ps.r.push(rm);
+            });
     }
 }
 
@@ -628,6 +677,10 @@ impl ContinuationProblem for ShellModel {
 
     fn unknown_scale(&self) -> Vec<f64> {
         self.scales()
+    }
+
+    fn reserve_orders(&mut self, orders: usize) {
+        self.orders = orders;
     }
 
     /// Contact events: the gap of every candidate pair over the width of
@@ -669,6 +722,12 @@ impl ContinuationProblem for ShellModel {
                     &self.free,
                     self.ndof,
                 ));
+                self.slots = self
+                    .elements
+                    .iter()
+                    .map(|e| element_slots(&s, &e.nodes, &self.free))
+                    .collect::<Option<_>>()
+                    .unwrap_or_default();
                 self.structure = Some(Arc::clone(&s));
                 s
             }
@@ -682,10 +741,11 @@ impl ContinuationProblem for ShellModel {
         }
         // Element matrices in parallel, by chunks (bounded memory), added in
         // element order.
-        for (elements, series) in self
+        for (chunk, (elements, series)) in self
             .elements
             .chunks(TANGENT_CHUNK)
             .zip(self.el_series.chunks(TANGENT_CHUNK))
+            .enumerate()
         {
             let kes: Vec<_> = series
                 .par_iter()
@@ -693,8 +753,9 @@ impl ContinuationProblem for ShellModel {
                 .with_min_len(PAR_MIN)
                 .map(|(st, e)| st.tangent(e))
                 .collect();
-            for (e, ke) in elements.iter().zip(&kes) {
-                self.scatter_element(e, ke, &mut k, &mut rl);
+            for (i, (e, ke)) in elements.iter().zip(&kes).enumerate() {
+                let slots = self.slots.get(chunk * TANGENT_CHUNK + i);
+                self.scatter_element(e, slots, ke, &mut k, &mut rl);
             }
         }
         let prescribed = &self.prescribed;
@@ -769,18 +830,33 @@ impl ContinuationProblem for ShellModel {
                 self.complete_order(&u[m], lambda[m]);
             }
         }
-        self.complete_order(&u[p - 1], lambda[p - 1]);
-        let mut rhs = vec![0.0; self.free.len()];
-        // Element terms in parallel, summed in element order (the same sums
-        // as a sequential loop, bit for bit).
-        let forces: Vec<_> = self
+        // Order p − 1 completed and the order-p element terms in one pass
+        // over the elements: each element's data (its 28×28 map above all)
+        // is read from memory once per order instead of twice. In parallel,
+        // summed in element order (the same sums as a sequential loop).
+        // Chunks of elements in parallel, each element prefetching the
+        // next one's data while it computes (fe::prefetch).
+        let full = self.expand(&u[p - 1], lambda[p - 1]);
+        let forces: Vec<Vec<[f64; crate::shell::kinematics::NDOF_EL]>> = self
             .elements
-            .par_iter()
-            .zip(self.el_series.par_iter_mut())
-            .with_min_len(PAR_MIN)
-            .map(|(e, st)| st.rhs(e))
+            .par_chunks(PAR_MIN)
+            .zip(self.el_series.par_chunks_mut(PAR_MIN))
+            .map(|(elements, series)| {
+                (0..elements.len())
+                    .map(|i| {
+                        if let (Some(e), Some(st)) = (elements.get(i + 1), series.get(i + 1)) {
+                            st.prefetch(e);
+                        }
+                        let e = &elements[i];
+                        let (x, d) = Self::element_coefficients(e, &full);
+                        series[i].complete_and_rhs(e, &x, &d)
+                    })
+                    .collect()
+            })
             .collect();
-        for (e, f) in self.elements.iter().zip(&forces) {
+        self.complete_pairs(&full, lambda[p - 1]);
+        let mut rhs = vec![0.0; self.free.len()];
+        for (e, f) in self.elements.iter().zip(forces.iter().flatten()) {
             for (i, &n) in e.nodes.iter().enumerate() {
                 for k in 0..6 {
                     rhs[dof(n, k)] += f[6 * i + k];
@@ -833,20 +909,34 @@ impl ContinuationProblem for ShellModel {
                 }
             }
         }
-        for ps in &mut self.pair_series {
-            let pair = &self.pairs[ps.pair];
-            let (hs, ns) = ps.gap.starred();
-            let mut h = ps.gap.h.clone();
-            h.push(hs);
-            let mut r = ps.r.clone();
-            r.push(0.0);
-            let rs = pair.law.force_coeff(&r, &h, p);
-            let mut f = ns * ps.r[0] + ps.gap.normal(0) * rs;
-            for q in 1..p {
-                f += ps.gap.normal(p - q) * ps.r[q];
-            }
+        // Contact pairs in parallel (their buffers sized at the step start:
+        // no allocation here), added in pair order.
+        let pairs = &self.pairs;
+        let pair_forces: Vec<Vec3> = self
+            .pair_series
+            .par_iter_mut()
+            .with_min_len(PAR_MIN)
+            .map(|ps| {
+                let pair = &pairs[ps.pair];
+                let (hs, ns) = ps.gap.starred();
+                // The law's order p with h_p = h*_p and r_p = 0, on the
+                // series themselves (pushed, then popped).
+                ps.gap.h.push(hs);
+                ps.r.push(0.0);
+                let rs = pair.law.force_coeff(&ps.r, &ps.gap.h, p);
+                ps.gap.h.pop();
+                ps.r.pop();
+                let mut f = ns * ps.r[0] + ps.gap.normal(0) * rs;
+                for q in 1..p {
+                    f += ps.gap.normal(p - q) * ps.r[q];
+                }
+                f
+            })
+            .collect();
+        for (ps, f) in self.pair_series.iter().zip(&pair_forces) {
+            let node = self.pairs[ps.pair].node;
             for k in 0..3 {
-                rhs[dof(pair.node, k)] -= f[k];
+                rhs[dof(node, k)] -= f[k];
             }
         }
         Self::check_finite(&rhs, lambda[0], "series right-hand side")?;

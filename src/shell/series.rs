@@ -28,6 +28,7 @@ use super::kinematics::{
     NCOL, NDOF_EL, NDOF_Y, NodalVectors, PackedSym, SYM_INDEX, SYM_PAIRS, Vec3, YMatrix,
     element_force, element_matrix, nodal_vectors, pack, unpack,
 };
+use crate::fe::prefetch::prefetch;
 
 /// Series of one element over an ANM step: nodal vectors and geometric
 /// stiffnesses of every complete order.
@@ -100,6 +101,30 @@ impl ElementSeries {
         }
     }
 
+    /// Room for `orders` orders (no allocation while they are completed).
+    pub fn reserve(&mut self, orders: usize) {
+        let more = orders.saturating_sub(self.y.len());
+        self.y.reserve(more);
+        self.kg.reserve(more);
+    }
+
+    /// Order 0 at the state (x0, d0), in the buffers of an earlier series.
+    pub fn restart(&mut self, e: &ShellElement, x0: &[Vec3; 4], d0: &[Vec3; 4]) {
+        self.y.clear();
+        self.kg.clear();
+        self.y.push(nodal_vectors(x0, d0));
+        self.kg.push(pack(&e.state_geometric(x0, d0)));
+        self.kg_star = None;
+    }
+
+    /// Prefetches the series' data and the element's map (fe::prefetch):
+    /// what [`ElementSeries::complete_and_rhs`] reads.
+    pub fn prefetch(&self, e: &ShellElement) {
+        prefetch(&self.y);
+        prefetch(&self.kg);
+        e.prefetch_map();
+    }
+
     pub fn orders(&self) -> usize {
         self.y.len()
     }
@@ -143,8 +168,44 @@ impl ElementSeries {
     /// element unknown layout (v, w per node).
     pub fn rhs(&mut self, e: &ShellElement) -> [f64; NDOF_EL] {
         let p = self.y.len();
+        let kg_star = e.packed_geometric(&gram_convolution(&self.y, p, 1));
+        self.force(p, kg_star)
+    }
+
+    /// [`ElementSeries::complete`] of order m, then [`ElementSeries::rhs`]
+    /// of order m + 1, with one pass over the element's map for the two
+    /// products K(Y_0ᵀY_m + Y_mᵀY_0) and K(M*_(m+1)): the map is the
+    /// largest datum of an element, and the series streams every element
+    /// once per order.
+    pub fn complete_and_rhs(
+        &mut self,
+        e: &ShellElement,
+        xm: &[Vec3; 4],
+        dm: &[Vec3; 4],
+    ) -> [f64; NDOF_EL] {
+        let m = self.y.len();
+        let kg_star_m = match self.kg_star.take() {
+            Some((p, kg)) if p == m => kg,
+            _ if m == 1 => PackedSym::zeros(),
+            _ => {
+                self.complete(e, xm, dm);
+                return self.rhs(e);
+            }
+        };
+        let ym = nodal_vectors(xm, dm);
+        let mut first = PackedSym::zeros();
+        add_gram_pair(&self.y[0], &ym, &mut first);
+        self.y.push(ym);
+        let (kg_first, kg_star) =
+            e.packed_geometric_pair(&first, &gram_convolution(&self.y, m + 1, 1));
+        self.kg.push(kg_star_m + kg_first);
+        self.force(m + 1, kg_star)
+    }
+
+    /// f*_p = Y_0 Kg*_p + Σ_{r=1}^{p−1} Y_r Kg_{p−r}, keeping Kg*_p for
+    /// the completion of order p.
+    fn force(&mut self, p: usize, kg_star: PackedSym) -> [f64; NDOF_EL] {
         let y = &self.y;
-        let kg_star = e.packed_geometric(&gram_convolution(y, p, 1));
         let mut f = NodalVectors::zeros();
         add_product(&y[0], &kg_star, &mut f);
         for (yr, kg) in y[1..].iter().zip(self.kg[1..].iter().rev()) {
@@ -158,33 +219,9 @@ impl ElementSeries {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::shell::Material;
     use nalgebra::{SMatrix, SVector};
 
-    /// A curved, distorted element far from the origin.
-    fn element() -> (ShellElement, [Vec3; 4], [Vec3; 4]) {
-        let far = Vec3::new(40.0, -25.0, 10.0);
-        let x = [
-            Vec3::new(0.0, 0.0, 0.0),
-            Vec3::new(0.11, 0.01, 0.02),
-            Vec3::new(0.12, 0.09, 0.01),
-            Vec3::new(-0.01, 0.1, 0.03),
-        ]
-        .map(|v| v + far);
-        let d = [
-            Vec3::new(0.1, 0.0, 1.0),
-            Vec3::new(-0.1, 0.05, 1.0),
-            Vec3::new(0.0, -0.1, 1.0),
-            Vec3::new(0.05, 0.05, 1.0),
-        ]
-        .map(|v| v.normalize());
-        let material = Material {
-            young: 2e5,
-            poisson: 0.3,
-        };
-        let e = ShellElement::new(0, [0, 1, 2, 3], &x, &d, 0.01, &material).unwrap();
-        (e, x, d)
-    }
+    use crate::shell::element::tests::element;
 
     fn nodal(seed: f64, scale: f64) -> ([Vec3; 4], [Vec3; 4]) {
         let v =
@@ -247,8 +284,18 @@ mod tests {
         };
         st.complete(&e, &ys[0].0, &ys[0].1);
         let scale = coeff(1).norm();
+        // The fused completion and right-hand side, from a copy one order
+        // behind, must give the same right-hand side.
+        let mut fused: Option<SVector<f64, NDOF_EL>> = None;
         for p in 2..=6 {
             let rhs = SVector::<f64, NDOF_EL>::from_column_slice(&st.rhs(&e));
+            if let Some(f) = fused {
+                let diff = (f - rhs).norm() / scale;
+                assert!(
+                    diff < 1e-14,
+                    "order {p}: fused right-hand side off by {diff:.3e}"
+                );
+            }
             if p == 4 {
                 // The other path to Kg_p: without the right-hand side's K(M*_p).
                 let mut fresh = st.clone();
@@ -266,6 +313,10 @@ mod tests {
             } else {
                 ([Vec3::zeros(); 4], [Vec3::zeros(); 4])
             };
+            let mut ahead = st.clone();
+            fused = Some(SVector::from_column_slice(
+                &ahead.complete_and_rhs(&e, &xp, &dp),
+            ));
             st.complete(&e, &xp, &dp);
         }
     }

@@ -391,7 +391,7 @@ fn scaling_items_merge_to_the_single_process_table() {
             .filter(|l| l.starts_with("| ") && !l.starts_with("| mesh"))
             .map(|l| {
                 let c: Vec<&str> = l.split('|').map(str::trim).collect();
-                format!("{} {} {} {}", c[1], c[2], c[3], c[9])
+                format!("{} {} {} {}", c[1], c[2], c[3], c[10])
             })
             .collect()
     };

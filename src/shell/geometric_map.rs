@@ -1,0 +1,131 @@
+//! The element's linear map M ↦ Kg(σ(E(M))) on packed symmetric 7×7
+//! matrices (a nodal Gram matrix to its geometric stiffness), stored as a
+//! symmetric matrix: half the memory, and half of what the series reads
+//! from memory per element and order.
+//!
+//! Why it is symmetric up to a diagonal scaling: with m the packed Gram
+//! matrix (entries M_ab, a ≤ b), every strain component is E_c = Σ_k A_ck
+//! m_k (kinematics::Point::gram_strain), the stresses are σ = D A m with D
+//! symmetric (material, ANS as an interpolation and its transpose, EAS
+//! condensation), and Kg_ab = Σ_c σ_c (∂E_c/∂M_ab + ∂E_c/∂M_ba), which in
+//! packed form is S Aᵀ σ with S = 2 on the diagonal pairs (a = b) and 1
+//! elsewhere. So K = S P with P = Aᵀ D A symmetric (measured on a distorted
+//! element: K_ij / s_i − K_ji / s_j ≤ 2e-16 of max |K|).
+
+use super::kinematics::{NSYM, PackedSym, SYM_PAIRS};
+use nalgebra::SMatrix;
+
+/// Stored entries: the upper triangle of P.
+const NPACKED: usize = NSYM * (NSYM + 1) / 2;
+
+/// S, the packing weight of entry k: 2 for a diagonal pair (a, a).
+const fn weight(k: usize) -> f64 {
+    if SYM_PAIRS[k].0 == SYM_PAIRS[k].1 {
+        2.0
+    } else {
+        1.0
+    }
+}
+
+/// K = S P with P symmetric, P's upper triangle stored column by column
+/// (column j: P_0j … P_jj, contiguous).
+#[derive(Clone)]
+pub struct GeometricMap {
+    p: [f64; NPACKED],
+}
+
+impl GeometricMap {
+    /// From the full map K, its columns the images of the unit packed
+    /// matrices. P = S⁻¹ K is symmetrized (its two triangles agree to
+    /// round-off, see the module note).
+    pub fn from_full(k: &SMatrix<f64, NSYM, NSYM>) -> Self {
+        let mut p = [0.0; NPACKED];
+        let mut n = 0;
+        for j in 0..NSYM {
+            for i in 0..=j {
+                p[n] = 0.5 * (k[(i, j)] / weight(i) + k[(j, i)] / weight(j));
+                n += 1;
+            }
+        }
+        Self { p }
+    }
+
+    /// K a and K b with one pass over the stored entries (the series needs
+    /// two images per order: the completed order and the next right-hand
+    /// side). Column j of the triangle adds a_j P_{0..j, j} to rows 0..j
+    /// (above the diagonal) and its dot product with a_{0..j} to row j
+    /// (below it, by symmetry).
+    pub fn apply_pair(&self, a: &PackedSym, b: &PackedSym) -> (PackedSym, PackedSym) {
+        // a and b side by side: every stored entry multiplies a pair.
+        let ab: [[f64; 2]; NSYM] = std::array::from_fn(|j| [a[j], b[j]]);
+        let mut k = [[0.0; 2]; NSYM];
+        for j in 0..NSYM {
+            let off = j * (j + 1) / 2;
+            let col = &self.p[off..off + j + 1];
+            let abj = ab[j];
+            let mut below = [0.0; 2];
+            for i in 0..j {
+                let c = col[i];
+                k[i][0] += c * abj[0];
+                k[i][1] += c * abj[1];
+                below[0] += c * ab[i][0];
+                below[1] += c * ab[i][1];
+            }
+            k[j][0] += below[0] + col[j] * abj[0];
+            k[j][1] += below[1] + col[j] * abj[1];
+        }
+        (
+            PackedSym::from_fn(|i, _| weight(i) * k[i][0]),
+            PackedSym::from_fn(|i, _| weight(i) * k[i][1]),
+        )
+    }
+
+    /// Prefetches the stored entries (fe::prefetch).
+    pub fn prefetch(&self) {
+        crate::fe::prefetch::prefetch(&self.p);
+    }
+
+    /// K m.
+    pub fn apply(&self, m: &PackedSym) -> PackedSym {
+        self.apply_pair(m, &PackedSym::zeros()).0
+    }
+
+    /// The full map K (the tangent reads its columns).
+    pub fn full(&self) -> SMatrix<f64, NSYM, NSYM> {
+        let mut k = SMatrix::<f64, NSYM, NSYM>::zeros();
+        let mut n = 0;
+        for j in 0..NSYM {
+            for i in 0..=j {
+                k[(i, j)] = weight(i) * self.p[n];
+                k[(j, i)] = weight(j) * self.p[n];
+                n += 1;
+            }
+        }
+        k
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A map K = S P from a random-looking symmetric P: stored and applied,
+    /// it gives the products of the full matrix.
+    #[test]
+    fn packed_map_applies_as_the_full_matrix() {
+        let p = SMatrix::<f64, NSYM, NSYM>::from_fn(|i, j| {
+            let (a, b) = (i.min(j) as f64, i.max(j) as f64);
+            (0.37 * a + 1.1 * b).sin() + if i == j { 3.0 } else { 0.0 }
+        });
+        let k = SMatrix::<f64, NSYM, NSYM>::from_fn(|i, j| weight(i) * p[(i, j)]);
+        let map = GeometricMap::from_full(&k);
+        assert_eq!(map.full(), k);
+        let a = PackedSym::from_fn(|i, _| (0.3 * i as f64).cos());
+        let b = PackedSym::from_fn(|i, _| (0.7 * i as f64 + 0.2).sin());
+        let (ka, kb) = map.apply_pair(&a, &b);
+        let scale = (k * a).norm();
+        assert!((ka - k * a).norm() <= 1e-14 * scale);
+        assert!((kb - k * b).norm() <= 1e-14 * (k * b).norm());
+        assert!((map.apply(&a) - k * a).norm() <= 1e-14 * scale);
+    }
+}
