@@ -157,9 +157,16 @@ impl Pade {
 }
 
 /// Range of the Padé approximant: the largest a in [a_poly, a_cap] (below the
-/// first pole) with |P_n(a) - P_{n-1}(a)| <= eps |P_n(a)|, found by bisection.
-/// Returns `None` when Padé cannot be built.
-pub fn range(terms: &[Vec<f64>], n: usize, eps: f64, a_poly: f64, a_cap: f64) -> Option<f64> {
+/// first pole) with |P_n(a) - P_{n-1}(a)| <= eps |P_n(a)|, found by bisection;
+/// with P_n, which the step then uses. Returns `None` when Padé cannot be
+/// built.
+pub fn range(
+    terms: &[Vec<f64>],
+    n: usize,
+    eps: f64,
+    a_poly: f64,
+    a_cap: f64,
+) -> Option<(f64, Pade)> {
     let pn = Pade::new(terms, n)?;
     let pm = Pade::new(terms, pn.terms_used() - 1)?;
     let mut hi = a_cap;
@@ -169,19 +176,34 @@ pub fn range(terms: &[Vec<f64>], n: usize, eps: f64, a_poly: f64, a_cap: f64) ->
         }
     }
     if hi <= a_poly {
-        return Some(a_poly);
+        return Some((a_poly, pn));
     }
-    let ok = |a: f64| {
-        let x = pn.eval(terms, a);
-        let y = pm.eval(terms, a);
-        let diff: Vec<f64> = x.iter().zip(&y).map(|(a, b)| a - b).collect();
+    // P_n(a) and P_n(a) − P_{n−1}(a) in two buffers, filled in one pass over
+    // the terms per trial (the bisection's 42 trials would otherwise
+    // allocate and sweep the terms twice each): the same sums, term by
+    // term in order, as Pade::eval.
+    let len = terms[1].len();
+    let (mut x, mut diff) = (vec![0.0; len], vec![0.0; len]);
+    let mut ok = |a: f64| {
+        let (wn, wm) = (pn.weights(a), pm.weights(a));
+        for i in 0..len {
+            let (mut xi, mut yi) = (0.0, 0.0);
+            for (f, t) in wn.iter().zip(&terms[1..]) {
+                xi += f * t[i];
+            }
+            for (f, t) in wm.iter().zip(&terms[1..]) {
+                yi += f * t[i];
+            }
+            x[i] = xi;
+            diff[i] = xi - yi;
+        }
         norm(&diff) <= eps * norm(&x)
     };
     if !ok(a_poly) {
-        return Some(a_poly);
+        return Some((a_poly, pn));
     }
     if ok(hi) {
-        return Some(hi);
+        return Some((hi, pn));
     }
     let (mut lo, mut up) = (a_poly, hi);
     for _ in 0..40 {
@@ -192,7 +214,7 @@ pub fn range(terms: &[Vec<f64>], n: usize, eps: f64, a_poly: f64, a_cap: f64) ->
             up = mid;
         }
     }
-    Some(lo)
+    Some((lo, pn))
 }
 
 #[cfg(test)]

@@ -366,10 +366,10 @@ pub(crate) fn series_step<P: ContinuationProblem + ?Sized>(
     // series, and the approximant is linear in the terms, so that
     // `PathStep::eval` applies it to the terms in the problem's units.
     if cfg.pade
-        && let Some(a) = pade::range(&terms, n_ord, cfg.eps, a_poly, cap.min(10.0 * a_poly))
+        && let Some((a, pn)) = pade::range(&terms, n_ord, cfg.eps, a_poly, cap.min(10.0 * a_poly))
         && a > a_poly
     {
-        step.pade = pade::Pade::new(&terms, n_ord);
+        step.pade = Some(pn);
         step.length = a;
     }
     drop(terms);
