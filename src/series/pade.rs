@@ -119,12 +119,18 @@ impl Pade {
     /// The increment W(a) - W_0.
     pub fn eval(&self, terms: &[Vec<f64>], a: f64) -> Vec<f64> {
         let mut out = vec![0.0; terms[1].len()];
+        self.eval_into(terms, a, &mut out);
+        out
+    }
+
+    /// [`Pade::eval`] into `out` (no allocation).
+    pub fn eval_into(&self, terms: &[Vec<f64>], a: f64, out: &mut [f64]) {
+        out.fill(0.0);
         for (f, t) in self.weights(a).iter().zip(&terms[1..]) {
             for (o, t) in out.iter_mut().zip(t) {
                 *o += f * t;
             }
         }
-        out
     }
 
     /// Smallest positive real root of D_{n-1} below `limit`, if any.
@@ -178,24 +184,14 @@ pub fn range(
     if hi <= a_poly {
         return Some((a_poly, pn));
     }
-    // P_n(a) and P_n(a) − P_{n−1}(a) in two buffers, filled in one pass over
-    // the terms per trial (the bisection's 42 trials would otherwise
-    // allocate and sweep the terms twice each): the same sums, term by
-    // term in order, as Pade::eval.
-    let len = terms[1].len();
-    let (mut x, mut diff) = (vec![0.0; len], vec![0.0; len]);
+    // P_n(a) and P_n(a) − P_{n−1}(a) in two buffers reused by the
+    // bisection's trials.
+    let (mut x, mut diff) = (vec![0.0; terms[1].len()], vec![0.0; terms[1].len()]);
     let mut ok = |a: f64| {
-        let (wn, wm) = (pn.weights(a), pm.weights(a));
-        for i in 0..len {
-            let (mut xi, mut yi) = (0.0, 0.0);
-            for (f, t) in wn.iter().zip(&terms[1..]) {
-                xi += f * t[i];
-            }
-            for (f, t) in wm.iter().zip(&terms[1..]) {
-                yi += f * t[i];
-            }
-            x[i] = xi;
-            diff[i] = xi - yi;
+        pn.eval_into(terms, a, &mut x);
+        pm.eval_into(terms, a, &mut diff);
+        for (d, x) in diff.iter_mut().zip(&x) {
+            *d = x - *d;
         }
         norm(&diff) <= eps * norm(&x)
     };

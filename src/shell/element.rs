@@ -430,13 +430,7 @@ pub(crate) mod tests {
     fn geometric_map_is_symmetric_up_to_the_packing_weights() {
         let (e, _, _) = element();
         let k = e.geometric_map();
-        let s = |i: usize| {
-            if SYM_PAIRS[i].0 == SYM_PAIRS[i].1 {
-                2.0
-            } else {
-                1.0
-            }
-        };
+        let s = crate::shell::geometric_map::weight;
         let scale = k.abs().max();
         for i in 0..NSYM {
             for j in 0..NSYM {

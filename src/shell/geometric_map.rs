@@ -19,7 +19,7 @@ use nalgebra::SMatrix;
 const NPACKED: usize = NSYM * (NSYM + 1) / 2;
 
 /// S, the packing weight of entry k: 2 for a diagonal pair (a, a).
-const fn weight(k: usize) -> f64 {
+pub(crate) const fn weight(k: usize) -> f64 {
     if SYM_PAIRS[k].0 == SYM_PAIRS[k].1 {
         2.0
     } else {

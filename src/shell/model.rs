@@ -33,7 +33,7 @@
 #![allow(clippy::needless_range_loop)]
 
 use super::element::{ElementMatrix, ShellElement};
-use super::kinematics::Vec3;
+use super::kinematics::{NDOF_EL, Vec3};
 use super::material::Material;
 use super::series::ElementSeries;
 use crate::contact::Motion;
@@ -840,13 +840,13 @@ impl ContinuationProblem for ShellModel {
             }
         }
         // Order p − 1 completed and the order-p element terms in one pass
-        // over the elements: each element's data (its 28×28 map above all)
-        // is read from memory once per order instead of twice. In parallel,
-        // summed in element order (the same sums as a sequential loop).
-        // Chunks of elements in parallel, each element prefetching the
-        // next one's data while it computes (fe::prefetch).
+        // over the elements: each element's data (its map above all) is
+        // read from memory once per order instead of twice. Chunks of
+        // elements in parallel, each element prefetching the next one's
+        // data while it computes (fe::prefetch); summed in element order
+        // (the same sums as a sequential loop).
         let full = self.expand(&u[p - 1], lambda[p - 1]);
-        let forces: Vec<Vec<[f64; crate::shell::kinematics::NDOF_EL]>> = self
+        let forces: Vec<Vec<[f64; NDOF_EL]>> = self
             .elements
             .par_chunks(PAR_MIN)
             .zip(self.el_series.par_chunks_mut(PAR_MIN))

@@ -93,12 +93,13 @@ fn add_product(y: &NodalVectors, kg: &PackedSym, f: &mut NodalVectors) {
 impl ElementSeries {
     /// Order 0 at the state (x0, d0).
     pub fn start(e: &ShellElement, x0: &[Vec3; 4], d0: &[Vec3; 4]) -> Self {
-        let y0 = nodal_vectors(x0, d0);
-        Self {
-            y: vec![y0],
-            kg: vec![pack(&e.state_geometric(x0, d0))],
+        let mut series = Self {
+            y: vec![],
+            kg: vec![],
             kg_star: None,
-        }
+        };
+        series.restart(e, x0, d0);
+        series
     }
 
     /// Room for `orders` orders (no allocation while they are completed).
