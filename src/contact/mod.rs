@@ -3,6 +3,7 @@
 //! (gap and normal) and the contact candidate search.
 
 pub mod friction;
+pub mod log_reaction;
 pub mod motion;
 pub mod normal;
 pub mod obstacle;

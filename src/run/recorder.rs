@@ -67,6 +67,9 @@ pub struct StepRow {
     /// Critical points found at this step's end (in this step or the one
     /// before: `EventRecord::step` says which).
     pub events: Vec<EventRecord>,
+    /// Contact pairs that changed side of their law's switch during the
+    /// step ([`ContactSides`]).
+    pub contact_switches: usize,
 }
 
 /// A critical point of the path as written to summary.json (`events`) and
@@ -109,7 +112,7 @@ fn primary() -> String {
     "primary".into()
 }
 
-const STEP_COLUMNS: [&str; 11] = [
+const STEP_COLUMNS: [&str; 12] = [
     "step",
     "lambda_start",
     "lambda_end",
@@ -121,6 +124,7 @@ const STEP_COLUMNS: [&str; 11] = [
     "solves",
     "negative_pivots",
     "events",
+    "contact_switches",
 ];
 
 /// What the recorder keeps between steps: written into the checkpoint. The
@@ -147,6 +151,50 @@ pub struct RecorderState {
     /// lambda of the bifurcation where a secondary-branch run left the path.
     #[serde(default)]
     pub switched_at: Option<f64>,
+    /// Contact switches so far and each pair's side of its law's switch
+    /// ([`ContactSides`]).
+    #[serde(default)]
+    pub contact: ContactSides,
+}
+
+/// Which side of its law's switch each contact pair is on, with
+/// hysteresis: in contact below g = h / w = 1 (R above 0.62 K w in eq. 3's
+/// r (r + g) = 1), open above g = 10 (R below 0.1 K w), unchanged in
+/// between, so that a node moving about in the band does not count. A
+/// switch is a pair changing side between two step ends (a touch or a
+/// lift-off).
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+pub struct ContactSides {
+    pub switches: usize,
+    closed: Vec<Option<bool>>,
+}
+
+impl ContactSides {
+    /// Updates the sides from the pairs' g at a step end (not finite:
+    /// unknown, left as it was); returns the switches of this step.
+    pub fn update(&mut self, g: &[f64]) -> usize {
+        self.closed.resize(g.len(), None);
+        let mut n = 0;
+        for (side, &g) in self.closed.iter_mut().zip(g) {
+            let now = if g < 1.0 {
+                Some(true)
+            } else if g > 10.0 {
+                Some(false)
+            } else {
+                *side
+            };
+            if let (Some(a), Some(b)) = (*side, now)
+                && a != b
+            {
+                n += 1;
+            }
+            if now.is_some() {
+                *side = now;
+            }
+        }
+        self.switches += n;
+        n
+    }
 }
 
 pub struct Recorder<'s> {
@@ -341,6 +389,7 @@ impl<'s> Recorder<'s> {
                 r.solves.to_string(),
                 r.negative_pivots.map(|k| k.to_string()).unwrap_or_default(),
                 r.events.len().to_string(),
+                r.contact_switches.to_string(),
             ];
             w.write_record(&rec)
                 .and_then(|_| w.flush().map_err(csv::Error::from))
@@ -473,5 +522,25 @@ pub fn snapshot(model: &ShellModel, s: &State) -> Snapshot {
         reaction: r,
         force: f.into_iter().map(arr).collect(),
         state: s.full.to_vec(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::ContactSides;
+
+    #[test]
+    fn contact_sides_count_crossings_of_the_band_not_moves_inside_it() {
+        let mut s = ContactSides::default();
+        // First values: sides set, nothing counted; the second pair starts
+        // between the thresholds (side unknown).
+        assert_eq!(s.update(&[1e5, 5.0, -3.0]), 0);
+        // The first pair moves but stays open; the third pair opens.
+        assert_eq!(s.update(&[9.0, 2.0, 20.0]), 1);
+        // The first pair touches, the second gets a side (no switch).
+        assert_eq!(s.update(&[0.5, 0.9, f64::NAN]), 1);
+        // Back and forth between the thresholds, then the third pair touches.
+        assert_eq!(s.update(&[9.0, 5.0, -1.5]), 1);
+        assert_eq!(s.switches, 3);
     }
 }

@@ -77,6 +77,10 @@ pub struct RunReport {
     /// the path left for the bifurcated branch.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub switched_at: Option<f64>,
+    /// Contact pairs that changed side of their law's switch between step
+    /// ends, summed over the run (steps.csv `contact_switches`): a row of
+    /// nodes touching counts its nodes.
+    pub contact_switches: usize,
     /// history.csv: column names (lambda, then the probes).
     pub columns: Vec<String>,
     #[serde(skip)]
@@ -285,6 +289,7 @@ fn run_inner(
     let start = Instant::now();
     let mut model = build_model(scene)?;
     model.length_scale = scene.length_scale;
+    model.contact_arclength = scene.contact_arclength;
     let n_dof = model.ndof();
     let mut cfg = scene.solver.clone();
     cfg.lambda_scale = cfg.lambda_end.abs();
@@ -464,6 +469,8 @@ fn run_inner(
                     .into_iter()
                     .map(|e| record_event(&mut rec, model, e))
                     .collect::<Result<_>>()?;
+                let g = model.events(&step.u_end, step.lambda_end)?;
+                let contact_switches = rec.state.contact.update(&g);
                 rec.step(&StepRow {
                     step: step.index + 1,
                     lambda_start: step.lambda[0],
@@ -476,6 +483,7 @@ fn run_inner(
                     solves: stats.solves,
                     negative_pivots: step.negative_pivots,
                     events,
+                    contact_switches,
                 })?;
                 let every = scene.output.vtk_every;
                 if every > 0 && (step.index + 1).is_multiple_of(every) {
@@ -558,6 +566,7 @@ fn run_inner(
                     let du: Vec<f64> = u.iter().zip(&prev.0).map(|(a, b)| a - b).collect();
                     rec.state.arclength += chord(m, &du, lambda - prev.1, ncfg.lambda_end.abs());
                     count += 1;
+                    let contact_switches = rec.state.contact.update(&m.events(u, lambda)?);
                     rec.step(&StepRow {
                         step: count,
                         lambda_start: prev.1,
@@ -570,6 +579,7 @@ fn run_inner(
                         solves: stats.solves,
                         negative_pivots: stats.linear.negative_pivots,
                         events: vec![],
+                        contact_switches,
                     })?;
                     if grid.iter().any(|g| (g - lambda).abs() < 1e-12) {
                         let g = (lambda / d).round() * d;
@@ -627,6 +637,9 @@ fn run_inner(
                 )?;
             }
             rec.state.arclength = scale * l_end.abs();
+            let u: Vec<f64> = u1.iter().map(|x| x * l_end).collect();
+            rec.state.contact.update(&model.events(&zero, 0.0)?);
+            let contact_switches = rec.state.contact.update(&model.events(&u, l_end)?);
             rec.step(&StepRow {
                 step: 1,
                 lambda_start: 0.0,
@@ -639,8 +652,8 @@ fn run_inner(
                 solves: 1,
                 negative_pivots: stats.linear.negative_pivots,
                 events: vec![],
+                contact_switches,
             })?;
-            let u: Vec<f64> = u1.iter().map(|x| x * l_end).collect();
             (PathStop::End { lambda: l_end }, stats, (u, l_end))
         }
     };
@@ -724,6 +737,7 @@ fn run_inner(
         resumed_at_step,
         events: rec.state.events.clone(),
         switched_at: rec.state.switched_at,
+        contact_switches: rec.state.contact.switches,
         event_factorizations,
         columns: rec.columns.clone(),
         history: rec.state.history.clone(),

@@ -197,6 +197,7 @@ struct RawSolver {
     order: Option<usize>,
     eps: Option<f64>,
     pade: Option<bool>,
+    contact_arclength: Option<f64>,
     lambda_end: f64,
     max_steps: Option<usize>,
     residual_tol: Option<f64>,
@@ -400,6 +401,9 @@ pub struct ShellScene {
     pub branch: Branch,
     /// Characteristic length of the step control (solver.length_scale).
     pub length_scale: f64,
+    /// Weight of the contact reactions' logarithms in the ANM's
+    /// pseudo-arclength (solver.contact_arclength; contact::log_reaction).
+    pub contact_arclength: f64,
     pub output: OutputSpec,
 }
 
@@ -637,6 +641,10 @@ pub fn load(path: &Path) -> Result<ShellScene> {
     };
     let probes = probes(&ctx, &raw.probe, &fixed, &obstacles, contact.is_some())?;
     let (method, solver, length_scale) = solver(&c, &raw.solver, size)?;
+    let contact_arclength = match raw.solver.contact_arclength {
+        Some(w) => c.within("solver.contact_arclength", w, 0.0, 100.0)?,
+        None => DEFAULT_CONTACT_ARCLENGTH,
+    };
     let branch = branch(&c, &raw.solver, &method)?;
     let o = &raw.output;
     let lambda_step = c.positive("output.lambda_step", o.lambda_step)?;
@@ -682,6 +690,7 @@ pub fn load(path: &Path) -> Result<ShellScene> {
         method,
         solver,
         length_scale,
+        contact_arclength,
         output: OutputSpec {
             lambda_step,
             vtk_every: o.vtk_every.unwrap_or(10),
@@ -1523,6 +1532,11 @@ fn axis_of(s: &str) -> Option<usize> {
 }
 
 /// The probe quantities, for error messages and docs.
+/// solver.contact_arclength when absent: one e-fold of a contact reaction
+/// weighs in the ANM's pseudo-arclength as much as a displacement of
+/// solver.length_scale (contact::log_reaction; README, "Contact events").
+pub const DEFAULT_CONTACT_ARCLENGTH: f64 = 1.0;
+
 pub const QUANTITIES: &str = "ux, uy, uz, wx, wy, wz, x, y, z, reaction_x, reaction_y, reaction_z, contact_rn, contact_x, contact_y, contact_z, min_gap, contacts, lambda, arclength, tension";
 
 fn probes(
@@ -1775,6 +1789,7 @@ fn solver(c: &Checker, s: &RawSolver, size: f64) -> Result<(Method, Continuation
         ("solver.order", s.order.is_some()),
         ("solver.eps", s.eps.is_some()),
         ("solver.pade", s.pade.is_some()),
+        ("solver.contact_arclength", s.contact_arclength.is_some()),
     ];
     let method_name = s.method.as_deref().unwrap_or("anm");
     let refuse = |keys: &[(&str, bool)]| -> Result<()> {

@@ -55,6 +55,42 @@ pub trait ContinuationProblem {
     /// before each step's tangent: a problem may size its series buffers
     /// once instead of growing them order by order (default: ignored).
     fn reserve_orders(&mut self, _orders: usize) {}
+    /// Extra coordinates y(U, lambda) of the path parameter (default:
+    /// none), linearized at the state of the last [`Self::tangent`] call.
+    /// The step then measures its pseudo-arclength in (Ũ, λ̃, y) ([`super::path`]):
+    /// a coordinate that changes fast where U and lambda hardly move (the
+    /// logarithm of a contact reaction through the switch of its law)
+    /// spreads that stretch of the path over an O(1) range of a.
+    fn arc_coordinates(&mut self) -> Option<ArcCoordinates> {
+        None
+    }
+    /// Coefficient p >= 2 of y(U(a), lambda(a)) with U_p = 0 and
+    /// lambda_p = 0, called after [`Self::series_rhs`] of the same order
+    /// (only when [`Self::arc_coordinates`] gave some).
+    fn arc_coordinates_rhs(&mut self, _p: usize) -> Vec<f64> {
+        vec![]
+    }
+}
+
+/// The linear part of the problem's arc coordinates y at the step start:
+/// y_p = J U_p + y_lambda lambda_p + y*_p at every order p >= 1.
+#[derive(Clone, Debug, Default)]
+pub struct ArcCoordinates {
+    /// The rows of J = dy/dU, as (unknown, value) pairs.
+    pub rows: Vec<Vec<(usize, f64)>>,
+    /// dy/dlambda at fixed U.
+    pub lambda: Vec<f64>,
+}
+
+impl ArcCoordinates {
+    /// J u + y_lambda l.
+    pub fn apply(&self, u: &[f64], l: f64) -> Vec<f64> {
+        self.rows
+            .iter()
+            .zip(&self.lambda)
+            .map(|(row, yl)| row.iter().fold(yl * l, |s, &(j, v)| s + v * u[j]))
+            .collect()
+    }
 }
 
 /// Numerical settings of a continuation run.

@@ -35,6 +35,17 @@
 //! ```
 //!
 //! With every scale 1 this is exactly the unscaled method.
+//!
+//! Arc coordinates ([`ContinuationProblem::arc_coordinates`]): a problem
+//! may add coordinates y(U, lambda), with y_p = J U_p + y_lambda lambda_p
+//! + y*_p at every order, to every inner product above:
+//! y_t = J U_t + y_lambda (= dy/dlambda on the path) joins |Ũ_t|^2 in O1,
+//! <y_p, y_1> joins the orthogonality of Op (lambda_p = −(<U_b, U_1>~ +
+//! <y_b, y_1>) / (<U_t, U_1>~ + lambda_1 / Lambda^2 + <y_t, y_1>), y_b =
+//! J U_b + y*_p), and y_p joins the terms T̃_p of L. The path parameter is
+//! then a = <U − U0, U_1>~ + (lambda − lambda0) lambda_1 / Lambda^2 +
+//! <y − y0, y_1>; the step-end correction keeps its constraint in U and
+//! lambda (any plane transverse to the path serves).
 
 use super::continuation::{ContinuationConfig, ContinuationProblem, PathStep, factorize};
 use super::correct::{self, Constraint, Jacobian, Metric, Settings};
@@ -44,7 +55,7 @@ use super::pade;
 use super::stats::{Stats, charge};
 use super::stop::Stop;
 use crate::error::{Error, Result};
-use crate::linalg::{Factorization, LinearSolver, norm};
+use crate::linalg::{Factorization, LinearSolver, dot, norm};
 use serde::{Deserialize, Serialize};
 use std::time::Instant;
 
@@ -259,6 +270,11 @@ impl<'p, P: ContinuationProblem> Path<'p, P> {
     }
 }
 
+/// x scaled by s.
+fn scaled(x: &[f64], s: f64) -> Vec<f64> {
+    x.iter().map(|v| s * v).collect()
+}
+
 /// One ANM step from (u0, lambda0) (module docs, items 1-5).
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn series_step<P: ContinuationProblem + ?Sized>(
@@ -299,8 +315,13 @@ pub(crate) fn series_step<P: ContinuationProblem + ?Sized>(
     };
     // Order 1 (eq. O1): λ̃_1 = ±1/sqrt(1 + Lambda^2 |U_t|~^2); U_1 = lambda_1 U_t.
     let ut = solve(&r_lambda, stats, "order-1")?;
+    // The problem's arc coordinates (none by default): y_t = dy/dlambda
+    // along U_t; they join |Ũ_t|^2 in the normalization and every inner
+    // product below.
+    let arc = problem.arc_coordinates();
+    let yt = arc.as_ref().map_or(vec![], |c| c.apply(&ut, 1.0));
     let big_l = metric.lambda_scale();
-    let mut l1 = 1.0 / (1.0 + metric.dot_u(&ut, &ut) * (big_l * big_l)).sqrt();
+    let mut l1 = 1.0 / (1.0 + (metric.dot_u(&ut, &ut) + dot(&yt, &yt)) * (big_l * big_l)).sqrt();
     // Sign of <Ũ_1, Ũ_1'> + λ̃_1 λ̃_1' = (λ̃_1 / Lambda)(Lambda^2 <U_t, U_1'>~ + lambda_1').
     let orient = match prev_dir {
         Some((pu, pl)) => l1 * (metric.dot_u(&ut, pu) * (big_l * big_l) + pl),
@@ -315,20 +336,35 @@ pub(crate) fn series_step<P: ContinuationProblem + ?Sized>(
         ut.iter().map(|x| lambda1 * x).collect::<Vec<_>>(),
     ];
     let mut ls = vec![lambda0, lambda1];
-    // <U_t, U_1>~ + lambda_1 / Lambda^2 (eq. Op).
-    let denom = metric.dot_u(&ut, &us[1]) + lambda1 * metric.lambda_weight();
+    let mut ys = vec![vec![0.0; yt.len()], scaled(&yt, lambda1)];
+    // <U_t, U_1>~ + lambda_1 / Lambda^2 + <y_t, y_1> (eq. Op).
+    let denom = metric.dot_u(&ut, &us[1]) + lambda1 * metric.lambda_weight() + dot(&yt, &ys[1]);
     for p in 2..=n_ord {
         let t = Instant::now();
         let rhs = problem.series_rhs(p, &us, &ls)?;
+        // y_p = J U_b + y*_p + lambda_p y_t.
+        let mut yb = match &arc {
+            Some(_) => problem.arc_coordinates_rhs(p),
+            None => vec![],
+        };
         stats.series_terms += 1;
         charge(&mut stats.series_s, t);
         let ub = solve(&rhs, stats, "order-p")?;
-        let lp = -metric.dot_u(&ub, &us[1]) / denom;
+        if let Some(c) = &arc {
+            for (y, j) in yb.iter_mut().zip(c.apply(&ub, 0.0)) {
+                *y += j;
+            }
+        }
+        let lp = -(metric.dot_u(&ub, &us[1]) + dot(&yb, &ys[1])) / denom;
         us.push(ub.iter().zip(&ut).map(|(b, t)| b + lp * t).collect());
         ls.push(lp);
+        ys.push(yb.iter().zip(&yt).map(|(b, t)| b + lp * t).collect());
     }
-    // Step length (eq. L): ratio rule on the scaled terms T̃_p = (Ũ_p, λ̃_p).
-    let terms = metric.stack(&us, &ls);
+    // Step length (eq. L): ratio rule on the scaled terms T̃_p = (Ũ_p, λ̃_p, y_p).
+    let mut terms = metric.stack(&us, &ls);
+    for (t, y) in terms.iter_mut().zip(&ys) {
+        t.extend_from_slice(y);
+    }
     let n1 = norm(&terms[1]);
     let nn = norm(&terms[n_ord]);
     if !(n1.is_finite() && nn.is_finite()) {

@@ -37,6 +37,7 @@ use super::kinematics::{NDOF_EL, Vec3};
 use super::material::Material;
 use super::series::ElementSeries;
 use crate::contact::Motion;
+use crate::contact::log_reaction::LogReaction;
 use crate::contact::obstacle::{GapSeries, Obstacle};
 use crate::contact::search::{self, ContactPair};
 use crate::error::{Error, Result};
@@ -55,6 +56,7 @@ const TANGENT_CHUNK: usize = 4096;
 /// the work (measured: the 40-element plate-cylinder ran 3× slower without).
 const PAR_MIN: usize = 256;
 use crate::series::ContinuationProblem;
+use crate::series::continuation::ArcCoordinates;
 
 /// A follower couple at a node: director force λ (moment × a3).
 #[derive(Clone, Debug)]
@@ -85,6 +87,13 @@ struct PairSeries {
     pair: usize,
     gap: GapSeries,
     r: Vec<f64>,
+    /// The gap's gradient at the step start (the reaction's direction).
+    normal0: Vec3,
+    /// The reaction's order p with U_p = 0, lambda_p = 0, from the last
+    /// right-hand side.
+    r_star: f64,
+    /// y = c ln(R + eta), the pair's arc coordinate.
+    log_r: LogReaction,
 }
 
 pub struct ShellModel {
@@ -109,6 +118,9 @@ pub struct ShellModel {
     /// Characteristic length of the displacement unknowns in the step
     /// control (the director unknowns are dimensionless).
     pub length_scale: f64,
+    /// Weight c of the contact pairs' arc coordinates c ln(R + eta)
+    /// (contact::log_reaction); 0: none.
+    pub contact_arclength: f64,
     active: Vec<usize>,
     // Series state of the current step.
     series_u0: Vec<f64>,
@@ -166,6 +178,7 @@ impl ShellModel {
             pairs: vec![],
             search_distance: f64::INFINITY,
             length_scale: 1.0,
+            contact_arclength: 0.0,
             active: vec![],
             series_u0: vec![],
             series_lambda0: f64::NAN,
@@ -631,7 +644,25 @@ impl ShellModel {
             gap.reserve(self.orders);
             let mut r = Vec::with_capacity(self.orders);
             r.push(pair.law.force(gap.h[0]));
-            ps.push(PairSeries { pair: ip, gap, r });
+            let normal0 = obstacles[pair.obstacle]
+                .gap(&x)
+                .ok_or_else(|| self.gap_error(pair.node, f64::NAN))?
+                .n;
+            let log_r = LogReaction::start(
+                self.contact_arclength,
+                &pair.law,
+                gap.h[0],
+                r[0],
+                self.orders,
+            );
+            ps.push(PairSeries {
+                pair: ip,
+                gap,
+                r,
+                normal0,
+                r_star: 0.0,
+                log_r,
+            });
         }
         self.pair_series = ps;
         Ok(())
@@ -675,6 +706,7 @@ impl ShellModel {
                 ps.gap.complete(&(Self::vec3(full, pair.node, 0) - v * lm));
                 let rm = pair.law.force_coeff(&ps.r, &ps.gap.h, m);
                 ps.r.push(rm);
+                ps.log_r.complete(&ps.r);
             });
     }
 }
@@ -708,6 +740,40 @@ impl ContinuationProblem for ShellModel {
                     .map_or(f64::NAN, |g| g.h / p.law.switch_width())
             })
             .collect())
+    }
+
+    /// With `contact_arclength` = c > 0: y = c ln(R + eta) of every active
+    /// pair (contact::log_reaction). Its row is dy/dh n on the node's free
+    /// displacements; a fixed displacement (lambda × prescribed) and the
+    /// obstacle's motion (the gap reads x − lambda V) go to dy/dlambda.
+    fn arc_coordinates(&mut self) -> Option<ArcCoordinates> {
+        if self.contact_arclength <= 0.0 || self.pair_series.is_empty() {
+            return None;
+        }
+        let mut arc = ArcCoordinates::default();
+        for ps in &self.pair_series {
+            let pair = &self.pairs[ps.pair];
+            let g = ps.log_r.dy_dh * ps.normal0;
+            let mut row = Vec::with_capacity(3);
+            let mut yl = -g.dot(&self.motions[pair.obstacle].velocity());
+            for i in 0..3 {
+                let d = dof(pair.node, i);
+                match self.free[d] {
+                    Some(k) => row.push((k, g[i])),
+                    None => yl += g[i] * self.prescribed[d],
+                }
+            }
+            arc.rows.push(row);
+            arc.lambda.push(yl);
+        }
+        Some(arc)
+    }
+
+    fn arc_coordinates_rhs(&mut self, p: usize) -> Vec<f64> {
+        self.pair_series
+            .iter()
+            .map(|ps| ps.log_r.starred(ps.r_star, &ps.r, p))
+            .collect()
     }
 
     fn residual(&mut self, u: &[f64], lambda: f64) -> Result<Vec<f64>> {
@@ -935,6 +1001,7 @@ impl ContinuationProblem for ShellModel {
                 let rs = pair.law.force_coeff(&ps.r, &ps.gap.h, p);
                 ps.gap.h.pop();
                 ps.r.pop();
+                ps.r_star = rs;
                 let mut f = ns * ps.r[0] + ps.gap.normal(0) * rs;
                 for q in 1..p {
                     f += ps.gap.normal(p - q) * ps.r[q];

@@ -14,10 +14,11 @@
 //! contact (at lambda ≈ k_s delta / F = 0.1) is crossed by one jump instead
 //! of the steps that shrink toward it and grow back, at the same accuracy.
 
+use anm::contact::log_reaction::LogReaction;
 use anm::contact::normal::NormalLaw;
 use anm::error::Result;
 use anm::linalg::{Choice, LinearSolver, SparseMatrix};
-use anm::series::continuation::{ContinuationConfig, ContinuationProblem, run};
+use anm::series::continuation::{ArcCoordinates, ContinuationConfig, ContinuationProblem, run};
 use anm::series::{Metric, Stats, correct_at_lambda};
 
 const KS: f64 = 1e3;
@@ -25,6 +26,12 @@ const F: f64 = 1.0;
 
 struct Spring {
     law: NormalLaw,
+    /// Weight c of the arc coordinate c ln(R + eta) (0: none).
+    arc: f64,
+    /// u at the last tangent (the step start).
+    u0: f64,
+    /// R_0..R_p of the last right-hand side (R_p with h_p = 0).
+    r: Vec<f64>,
 }
 
 impl Spring {
@@ -53,11 +60,32 @@ impl ContinuationProblem for Spring {
         ])
     }
     fn tangent(&mut self, u: &[f64], _lambda: f64) -> Result<(SparseMatrix, Vec<f64>)> {
+        self.u0 = u[0];
         let k = KS - self.law.stiffness(self.law.delta - u[0]);
         Ok((SparseMatrix::from_dense(&[vec![k]]), vec![-F]))
     }
     fn series_rhs(&mut self, p: usize, u: &[Vec<f64>], _lambda: &[f64]) -> Result<Vec<f64>> {
-        Ok(vec![self.force_series(u, p, 0.0)[p]])
+        self.r = self.force_series(u, p, 0.0);
+        Ok(vec![self.r[p]])
+    }
+    /// y = c ln(R + eta): dy/du = −dy/dh (h = delta − u).
+    fn arc_coordinates(&mut self) -> Option<ArcCoordinates> {
+        (self.arc > 0.0).then(|| {
+            let h0 = self.law.delta - self.u0;
+            let y = LogReaction::start(self.arc, &self.law, h0, self.law.force(h0), 1);
+            ArcCoordinates {
+                rows: vec![vec![(0, -y.dy_dh)]],
+                lambda: vec![0.0],
+            }
+        })
+    }
+    fn arc_coordinates_rhs(&mut self, p: usize) -> Vec<f64> {
+        let h0 = self.law.delta - self.u0;
+        let mut y = LogReaction::start(self.arc, &self.law, h0, self.r[0], p + 1);
+        for m in 1..p {
+            y.complete(&self.r[..=m]);
+        }
+        vec![y.starred(self.r[p], &self.r, p)]
     }
     fn unknown_scale(&self) -> Vec<f64> {
         vec![self.law.delta]
@@ -82,13 +110,19 @@ fn reference(law: &NormalLaw, lambda: f64) -> f64 {
 /// 0.05, 0.1, ..., 1: points on the series of ordinary steps, and on a
 /// jump's chord corrected by Newton at their lambda (as the shell driver
 /// does for its output grid).
-fn solve(events: bool) -> (usize, usize, f64) {
+fn solve(events: bool, arc: f64) -> (usize, usize, f64) {
     let law = NormalLaw {
         k: 1e9,
         eta: 1e-6,
         delta: 1e-4,
     };
-    let mut problem = Spring { law };
+    let spring = || Spring {
+        law,
+        arc,
+        u0: 0.0,
+        r: vec![],
+    };
+    let mut problem = spring();
     let cfg = ContinuationConfig {
         order: 15,
         eps: 1e-8,
@@ -100,7 +134,7 @@ fn solve(events: bool) -> (usize, usize, f64) {
     let grid: Vec<f64> = (1..=20).map(|i| 0.05 * i as f64).collect();
     let mut jumps = 0;
     let mut err: f64 = 0.0;
-    let mut grid_problem = Spring { law };
+    let mut grid_problem = spring();
     let metric = Metric::for_problem(&grid_problem, 1.0).unwrap();
     let mut lu = LinearSolver::new(Choice::Auto);
     let mut stats = Stats::default();
@@ -143,8 +177,8 @@ fn solve(events: bool) -> (usize, usize, f64) {
 
 #[test]
 fn one_contact_event_is_crossed_by_a_jump_at_the_same_accuracy() {
-    let (off_steps, off_jumps, off_err) = solve(false);
-    let (on_steps, on_jumps, on_err) = solve(true);
+    let (off_steps, off_jumps, off_err) = solve(false, 0.0);
+    let (on_steps, on_jumps, on_err) = solve(true, 0.0);
     println!("events off: {off_steps} steps, error {off_err:.2e}");
     println!("events on: {on_steps} steps ({on_jumps} jumps), error {on_err:.2e}");
     assert_eq!(off_jumps, 0);
@@ -152,4 +186,21 @@ fn one_contact_event_is_crossed_by_a_jump_at_the_same_accuracy() {
     assert!(on_steps < off_steps, "{on_steps} vs {off_steps} steps");
     // Both within the accuracy of the series (eps = 1e-8) on u / delta.
     assert!(off_err <= 1e-6 && on_err <= 1e-6, "{off_err:e} {on_err:e}");
+}
+
+/// The same contact crossed by ordinary steps measured along the arc
+/// coordinate y = ln(R + eta) as well (contact::log_reaction): the law's
+/// switch becomes an O(1) stretch of the path parameter instead of a
+/// near-singularity the steps shrink toward.
+#[test]
+fn the_reaction_logarithm_in_the_arclength_crosses_the_event_in_fewer_steps() {
+    let (plain_steps, _, plain_err) = solve(false, 0.0);
+    let (log_steps, _, log_err) = solve(false, 1.0);
+    println!("plain arclength: {plain_steps} steps, error {plain_err:.2e}");
+    println!("with ln(R + eta): {log_steps} steps, error {log_err:.2e}");
+    assert!(
+        2 * log_steps <= plain_steps,
+        "{log_steps} vs {plain_steps} steps"
+    );
+    assert!(log_err <= 1e-6, "{log_err:e}");
 }

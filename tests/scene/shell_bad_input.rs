@@ -383,6 +383,12 @@ fn fix_and_probe_key_errors_name_the_key() {
             vec!["solver.linear_solver", "got \"pardiso\""],
         ),
         (
+            "contact-arclength.toml",
+            "order = 15",
+            "order = 15\ncontact_arclength = -1.0",
+            vec!["solver.contact_arclength", "[0, 100]", "-1"],
+        ),
+        (
             "group-box.toml",
             "box = [[1.0, -1.0, -1.0], [1.0, 1.0, 1.0]]",
             "box = [[5.0, -1.0, -1.0], [6.0, 1.0, 1.0]]",
