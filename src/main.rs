@@ -372,6 +372,16 @@ fn main() -> ExitCode {
     unsafe {
         libc::signal(libc::SIGPIPE, libc::SIG_DFL);
     }
+    // glibc serves each allocation above 32 MB (a tangent's values, the
+    // sparse factor: 42 and 136 MB at 98,400 unknowns) with fresh pages that
+    // the kernel faults in and zeroes, at every step: 8–12% of the engine
+    // step there (README, "Step cost and scaling"). From the heap instead,
+    // kept between steps, they reuse the same pages.
+    #[cfg(all(target_os = "linux", target_env = "gnu"))]
+    unsafe {
+        libc::mallopt(libc::M_MMAP_MAX, 0);
+        libc::mallopt(libc::M_TRIM_THRESHOLD, libc::c_int::MAX);
+    }
     let cli = Cli::parse();
     // MPI lives for the whole process (feature mumps): every MUMPS instance
     // is dropped inside `dispatch`, before MPI_Finalize.

@@ -37,8 +37,8 @@
 //! With every scale 1 this is exactly the unscaled method.
 //!
 //! Arc coordinates ([`ContinuationProblem::arc_coordinates`]): a problem
-//! may add coordinates y(U, lambda), with y_p = J U_p + y_lambda lambda_p
-//! + y*_p at every order, to every inner product above:
+//! may add coordinates y(U, lambda), with y_p = y*_p + J U_p +
+//! y_lambda lambda_p at every order, to every inner product above:
 //! y_t = J U_t + y_lambda (= dy/dlambda on the path) joins |Ũ_t|^2 in O1,
 //! <y_p, y_1> joins the orthogonality of Op (lambda_p = −(<U_b, U_1>~ +
 //! <y_b, y_1>) / (<U_t, U_1>~ + lambda_1 / Lambda^2 + <y_t, y_1>), y_b =
