@@ -991,7 +991,7 @@ fn bench_shell(
     let mut notes = format!(
         "## {case}\n\nReference: {}; Newton (load control, |R|/|F| <= {:.0e}) differs from it by {:.2e} on {probe}. Output grid: lambda step {}. Wall times are medians of {repeat}.\n",
         reference.name,
-        bs::REFERENCE_RESIDUAL,
+        reference.residual,
         reference.floor,
         bs::LAMBDA_STEP
     );

@@ -4,7 +4,8 @@
 //!
 //! Error = max over the output grid of |q - q_ref| / max |q_ref| for the
 //! scene's key probe q (its first [[probe]]; uz_A on plate-cylinder), against the tightest ANM run (order 20,
-//! eps 1e-12, step-end residual [`REFERENCE_RESIDUAL`]); the Newton run at
+//! eps 1e-12, step-end residual the first of [`REFERENCE_RESIDUALS`] that
+//! it reaches the end with); the Newton run at
 //! that residual is measured against it too, as the floor of what the table
 //! resolves. Both methods report on the same λ grid
 //! (`output.lambda_step`, 0.05 here): Newton must converge at each grid
@@ -135,41 +136,59 @@ pub struct ShellReference {
     pub name: String,
     /// Error of the tightest Newton run against the reference.
     pub floor: f64,
+    /// The step-end residual |R|/|F| both runs were held to.
+    pub residual: f64,
 }
 
-/// Solves the tightest ANM and Newton runs of the scene.
+/// Solves the tightest ANM and Newton runs of the scene, at the first of
+/// [`REFERENCE_RESIDUALS`] that both reach the end with.
 pub fn reference(scene: &ShellScene) -> Result<ShellReference> {
+    let mut failure = None;
+    for &tol in &REFERENCE_RESIDUALS {
+        match reference_at(scene, tol) {
+            Ok(r) => return Ok(r),
+            Err(e) => failure = Some(e),
+        }
+    }
+    Err(failure.expect("REFERENCE_RESIDUALS is not empty"))
+}
+
+/// The reference runs at step-end residual `tol`.
+fn reference_at(scene: &ShellScene, tol: f64) -> Result<ShellReference> {
     let anm = ShellMethod::Anm {
         order: 20,
         eps: 1e-12,
         pade: false,
     };
     let mut tight = anm.configure(scene);
-    tight.solver.residual_tol = REFERENCE_RESIDUAL;
+    tight.solver.residual_tol = tol;
     let report = complete(run_loaded(&tight, None, false)?)?;
     let newton = ShellMethod::Newton {
         control: Control::Load,
         max_step: 0.01,
-        tol: REFERENCE_RESIDUAL,
+        tol,
     };
     let check = complete(solve(scene, &newton)?)?;
     let floor = uz_error(&check, &report);
     Ok(ShellReference {
         report,
         name: format!(
-            "{} {} (step-end |R|/|F| <= {REFERENCE_RESIDUAL:.0e})",
+            "{} {} (step-end |R|/|F| <= {tol:.0e})",
             anm.label(),
             anm.setting()
         ),
         floor,
+        residual: tol,
     })
 }
 
-/// Tightest residual the reference runs ask for. Below about 1e-8 |F| the
-/// residual of the shell sits at its round-off floor near lambda = 0 (both
-/// methods stop there: measured 1.3e-8 and 6e-9 at lambda ~ 1e-10), so this
-/// is as tight as a run to lambda = 1 gets.
-pub const REFERENCE_RESIDUAL: f64 = 2e-8;
+/// Step-end residuals the reference runs try, tightest first. Below about
+/// 1e-8 |F| the residual of the shell sits at its round-off floor near
+/// lambda = 0 (both methods stop there: measured 1.3e-8 and 6e-9 at lambda
+/// ~ 1e-10 on the 0.1 m mesh), and the floor rises with the mesh: on the
+/// 0.05 m mesh the ANM reference stops at 2e-8 (a residual of 2.6e-8 to
+/// 3.0e-8 near lambda = 1e-4), and the 0.025 m mesh reaches the end at 1e-7.
+pub const REFERENCE_RESIDUALS: [f64; 3] = [2e-8, 1e-7, 5e-7];
 
 /// A reference run must reach the end of the grid.
 fn complete(report: RunReport) -> Result<RunReport> {
