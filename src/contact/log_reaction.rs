@@ -28,9 +28,9 @@ use super::normal::NormalLaw;
 /// The series of y = c ln(R + eta) of one contact pair along a step.
 #[derive(Clone, Debug)]
 pub struct LogReaction {
-    /// c / rho_0; 0 where rho_0 <= 0 (a law with delta <= 0 away from
-    /// contact), which makes the coordinate constant.
-    c_over_rho0: f64,
+    /// c; 0 where rho_0 <= 0 (a law with delta <= 0 away from contact),
+    /// which makes the coordinate constant.
+    c: f64,
     /// 1 / rho_0 (0 with the coordinate off).
     inv_rho0: f64,
     /// dy/dh at the step start.
@@ -49,14 +49,14 @@ impl LogReaction {
         y.push(0.0);
         if !on {
             return Self {
-                c_over_rho0: 0.0,
+                c: 0.0,
                 inv_rho0: 0.0,
                 dy_dh: 0.0,
                 y,
             };
         }
         Self {
-            c_over_rho0: c / rho0,
+            c,
             inv_rho0: 1.0 / rho0,
             dy_dh: -c / root,
             y,
@@ -82,7 +82,7 @@ impl LogReaction {
         for k in 1..m {
             s += k as f64 * self.y[k] * r[m - k];
         }
-        self.c_over_rho0 * rm - self.inv_rho0 * s / m as f64
+        self.c * self.inv_rho0 * rm - self.inv_rho0 * s / m as f64
     }
 }
 

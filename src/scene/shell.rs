@@ -1531,12 +1531,12 @@ fn axis_of(s: &str) -> Option<usize> {
     }
 }
 
-/// The probe quantities, for error messages and docs.
 /// solver.contact_arclength when absent: one e-fold of a contact reaction
 /// weighs in the ANM's pseudo-arclength as much as a displacement of
 /// solver.length_scale (contact::log_reaction; README, "Contact events").
 pub const DEFAULT_CONTACT_ARCLENGTH: f64 = 1.0;
 
+/// The probe quantities, for error messages and docs.
 pub const QUANTITIES: &str = "ux, uy, uz, wx, wy, wz, x, y, z, reaction_x, reaction_y, reaction_z, contact_rn, contact_x, contact_y, contact_z, min_gap, contacts, lambda, arclength, tension";
 
 fn probes(

@@ -87,8 +87,6 @@ struct PairSeries {
     pair: usize,
     gap: GapSeries,
     r: Vec<f64>,
-    /// The gap's gradient at the step start (the reaction's direction).
-    normal0: Vec3,
     /// The reaction's order p with U_p = 0, lambda_p = 0, from the last
     /// right-hand side.
     r_star: f64,
@@ -644,10 +642,6 @@ impl ShellModel {
             gap.reserve(self.orders);
             let mut r = Vec::with_capacity(self.orders);
             r.push(pair.law.force(gap.h[0]));
-            let normal0 = obstacles[pair.obstacle]
-                .gap(&x)
-                .ok_or_else(|| self.gap_error(pair.node, f64::NAN))?
-                .n;
             let log_r = LogReaction::start(
                 self.contact_arclength,
                 &pair.law,
@@ -659,7 +653,6 @@ impl ShellModel {
                 pair: ip,
                 gap,
                 r,
-                normal0,
                 r_star: 0.0,
                 log_r,
             });
@@ -753,7 +746,8 @@ impl ContinuationProblem for ShellModel {
         let mut arc = ArcCoordinates::default();
         for ps in &self.pair_series {
             let pair = &self.pairs[ps.pair];
-            let g = ps.log_r.dy_dh * ps.normal0;
+            // The gap's gradient is the order-0 normal.
+            let g = ps.log_r.dy_dh * ps.gap.normal(0);
             let mut row = Vec::with_capacity(3);
             let mut yl = -g.dot(&self.motions[pair.obstacle].velocity());
             for i in 0..3 {
