@@ -6,6 +6,13 @@
 //! delta the initial gap, K the penalty stiffness and eta the regularization.
 //! R = 0 at h = delta; R ≈ -K h when penetrating; R h ≈ eta delta near contact;
 //! R → -eta far away (h ≫ delta), the "pull" DESIGN §3 warns about.
+//!
+//! At eta = 0 the law is the penalty law R = max(0, −K h), the limit of
+//! eq. (3) as eta → 0 (its switch width sqrt(eta delta / K) goes to 0): linear
+//! on each side of contact, only continuous at h = 0 ([`NormalLaw::is_piecewise`];
+//! the continuation engine ends its steps at the sign changes of h,
+//! series::kinks). Each function below takes the piece from the sign of h
+//! (h = 0: the open piece).
 
 use crate::series::Var;
 
@@ -24,6 +31,9 @@ impl NormalLaw {
     /// R = (K/2)(-h + sqrt(h^2 + 4 eta (delta - h)/K)), written without
     /// cancellation on either side of h = 0.
     pub fn force(&self, h: f64) -> f64 {
+        if self.is_piecewise() {
+            return (-self.k * h).max(0.0);
+        }
         let disc = h * h + 4.0 * self.eta * (self.delta - h) / self.k;
         let root = disc.max(0.0).sqrt();
         if h >= 0.0 {
@@ -31,6 +41,12 @@ impl NormalLaw {
         } else {
             0.5 * self.k * (root - h)
         }
+    }
+
+    /// eta = 0: the penalty law R = max(0, −K h), analytic on each side of
+    /// h = 0 and only continuous across it.
+    pub fn is_piecewise(&self) -> bool {
+        self.eta == 0.0
     }
 
     /// Width w = sqrt(eta |delta| / K) of the switch of eq. (3) at h = 0: in
@@ -46,6 +62,9 @@ impl NormalLaw {
 
     /// dR/dh from differentiating eq. (3): (2R/K + h) dR = -(R + eta) dh.
     pub fn stiffness(&self, h: f64) -> f64 {
+        if self.is_piecewise() {
+            return if h < 0.0 { -self.k } else { 0.0 };
+        }
         let r = self.force(h);
         -(r + self.eta) / (2.0 * r / self.k + h)
     }
@@ -61,6 +80,10 @@ impl NormalLaw {
     ///                          - sum_{k=1}^{p-1} R_k h_{p-k}.
     /// O(p) per order (incremental propagation).
     pub fn force_coeff(&self, r: &[f64], h: &[f64], p: usize) -> f64 {
+        if self.is_piecewise() {
+            // The piece of the series' start: R_p = −K h_p in contact.
+            return if h[0] < 0.0 { -self.k * h[p] } else { 0.0 };
+        }
         let mut s = -(self.eta + r[0]) * h[p];
         for k in 1..p {
             s -= r[k] * r[p - k] / self.k + r[k] * h[p - k];
@@ -112,6 +135,36 @@ mod tests {
 
     /// r = R / (K w) against the closed form of r (r + g) = 1 in g = h / w
     /// (the switch band of the law): r(0) = 1 up to the eta h term.
+    /// eta = 0: R = max(0, -K h), its slope and its series on each piece,
+    /// and eq. (3) at a small eta tends to it (the limit the penalty law is).
+    #[test]
+    fn eta_zero_is_the_penalty_law_on_each_side_of_contact() {
+        let pen = NormalLaw { eta: 0.0, ..law() };
+        assert!(pen.is_piecewise() && !law().is_piecewise());
+        for h in [-1e-3, -1e-9, 0.0, 1e-9, 1e-3] {
+            let want = if h < 0.0 { -1e9 * h } else { 0.0 };
+            assert_eq!(pen.force(h), want, "h = {h}");
+            assert_eq!(pen.stiffness(h), if h < 0.0 { -1e9 } else { 0.0 });
+            // eq. (3) at eta = 1e-18 N is within about eta (delta + |h|) / |h|
+            // of it (R (R/K + h) = eta (delta - h) to first order in eta).
+            let tiny = NormalLaw {
+                eta: 1e-18,
+                ..law()
+            };
+            if h != 0.0 {
+                let bound = 2.0 * tiny.eta * (tiny.delta + h.abs()) / h.abs() + 1e-12 * want;
+                assert!((tiny.force(h) - want).abs() <= bound, "h = {h}");
+            }
+        }
+        // Series along h(a) = h0 + h1 a: R_p = -K h_p in contact, 0 outside.
+        for (h0, k) in [(-2e-5, -1e9), (3e-5, 0.0)] {
+            let h = [h0, 1e-5, 0.0];
+            let r = [pen.force(h0), 0.0];
+            assert_eq!(pen.force_coeff(&r, &h, 1), k * 1e-5);
+            assert_eq!(pen.force_coeff(&r, &h, 2), 0.0);
+        }
+    }
+
     #[test]
     fn the_switch_width_makes_the_law_dimensionless() {
         let l = law();

@@ -601,7 +601,8 @@ pub fn load(path: &Path) -> Result<ShellScene> {
             Some(ContactSpec {
                 nodes: ctx.group(&ct.group, "contact.group")?,
                 k: c.positive("contact.k", ct.k)?,
-                eta: c.positive("contact.eta", ct.eta)?,
+                // 0: the penalty law R = max(0, -K h) (contact::normal).
+                eta: c.non_negative("contact.eta", ct.eta)?,
                 search_distance: c.positive("contact.search_distance", ct.search_distance)?,
             })
         }
@@ -641,8 +642,24 @@ pub fn load(path: &Path) -> Result<ShellScene> {
     };
     let probes = probes(&ctx, &raw.probe, &fixed, &obstacles, contact.is_some())?;
     let (method, solver, length_scale) = solver(&c, &raw.solver, size)?;
+    let piecewise = contact.as_ref().is_some_and(|ct| ct.eta == 0.0);
+    if piecewise && friction.is_some() {
+        return Err(c.fail(
+            "contact.eta",
+            "= 0 (the penalty law) is for frictionless scenes: with [friction] it must be > 0",
+        ));
+    }
     let contact_arclength = match raw.solver.contact_arclength {
+        Some(w) if piecewise && w != 0.0 => {
+            return Err(c.fail(
+                "solver.contact_arclength",
+                format!(
+                    "must be 0 with contact.eta = 0 (the penalty law has no switch band to stretch), got {w}"
+                ),
+            ));
+        }
         Some(w) => c.within("solver.contact_arclength", w, 0.0, 100.0)?,
+        None if piecewise => 0.0,
         None => DEFAULT_CONTACT_ARCLENGTH,
     };
     let branch = branch(&c, &raw.solver, &method)?;

@@ -51,6 +51,13 @@ pub trait ContinuationProblem {
     fn events(&self, _u: &[f64], _lambda: f64) -> Result<Vec<f64>> {
         Ok(vec![])
     }
+    /// Whether the problem is only piecewise analytic, its pieces meeting
+    /// where an event function changes sign (default: no): the engine then
+    /// ends each step just past the first such sign change
+    /// ([`super::kinks`]) instead of jumping events.
+    fn kinks(&self) -> bool {
+        false
+    }
     /// The number of series orders (N + 1) the steps will compute, told
     /// before each step's tangent: a problem may size its series buffers
     /// once instead of growing them order by order (default: ignored).

@@ -9,6 +9,7 @@ pub mod correct;
 pub mod dae;
 pub mod events;
 pub mod geometric;
+pub mod kinks;
 pub mod newton;
 pub mod pade;
 pub mod path;

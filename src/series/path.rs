@@ -51,6 +51,7 @@ use super::continuation::{ContinuationConfig, ContinuationProblem, PathStep, fac
 use super::correct::{self, Constraint, Jacobian, Metric, Settings};
 use super::events;
 use super::geometric;
+use super::kinks;
 use super::pade;
 use super::stats::{Stats, charge};
 use super::stop::Stop;
@@ -423,6 +424,14 @@ pub(crate) fn series_step<P: ContinuationProblem + ?Sized>(
         && let Some(a) = step.a_at_lambda(cfg.lambda_end)
     {
         step.length = a;
+    }
+    // A piecewise-analytic problem: end just past the first kink (the
+    // series are not valid beyond it).
+    if problem.kinks()
+        && let Some(a) = kinks::first_kink(problem, &step)?
+    {
+        step.length = a;
+        stats.kink_cuts += 1;
     }
     let scale = metric.residual_norm(&r_lambda).max(f64::MIN_POSITIVE);
     // An event within reach: cross it by a corrected jump (super::events).

@@ -19,6 +19,9 @@ pub struct Stats {
     pub corrections: usize,
     /// Step lengths halved because the step end was off the path.
     pub step_cuts: usize,
+    /// Steps ended at a kink of a piecewise-analytic problem (super::kinks).
+    #[serde(default)]
+    pub kink_cuts: usize,
     /// Seconds spent assembling tangents (and residuals).
     pub assembly_s: f64,
     pub factorization_s: f64,

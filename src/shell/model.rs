@@ -409,16 +409,32 @@ impl ShellModel {
         Ok((pair.node, kc))
     }
 
-    /// Contact reactions of the active pairs at the full state.
+    /// Contact reactions of the active pairs at the full state, and of the
+    /// left-out pairs of the penalty law that penetrate (a step ends at
+    /// their first contact, series::kinks, but its end correction may
+    /// carry them a round-off past it before they join the active set).
     pub fn contact_forces(&self, full: &[f64], lambda: f64) -> Result<Vec<NodalContact>> {
         let mut out = Vec::with_capacity(self.active.len());
         let obstacles = self.obstacles_at(lambda);
-        for &ip in &self.active {
+        let mut left_out = vec![];
+        if self.active.len() < self.pairs.len() && self.pairs.iter().any(|p| p.law.is_piecewise()) {
+            let mut is_active = vec![false; self.pairs.len()];
+            for &i in &self.active {
+                is_active[i] = true;
+            }
+            left_out = (0..self.pairs.len())
+                .filter(|&i| !is_active[i] && self.pairs[i].law.is_piecewise())
+                .collect();
+        }
+        for (k, &ip) in self.active.iter().chain(&left_out).enumerate() {
             let pair = &self.pairs[ip];
             let x = self.x0[pair.node] + Self::vec3(full, pair.node, 0);
             let g = obstacles[pair.obstacle]
                 .gap(&x)
                 .ok_or_else(|| self.gap_error(pair.node, lambda))?;
+            if k >= self.active.len() && g.h >= 0.0 {
+                continue;
+            }
             out.push(NodalContact {
                 node: pair.node,
                 obstacle: pair.obstacle,
@@ -508,7 +524,9 @@ impl ShellModel {
     /// The active set is frozen during a step: a candidate left out at the
     /// step start must not come within half the search distance of its
     /// obstacle before the next refresh, or its contact term would be
-    /// missing (error, with the advice to enlarge the search distance).
+    /// missing (error, with the advice to enlarge the search distance). Not
+    /// for the penalty law (eta = 0), whose left-out pairs enter the residual
+    /// as soon as they penetrate ([`ShellModel::contact_forces`]).
     fn check_inactive(&self, full: &[f64], lambda: f64) -> Result<()> {
         if self.pairs.len() == self.active.len() {
             return Ok(());
@@ -523,8 +541,12 @@ impl ShellModel {
                 continue;
             }
             let x = self.x0[p.node] + Self::vec3(full, p.node, 0);
+            // The penalty law carries nothing before contact, and its force
+            // at a penetration is in the residual whether the pair is active
+            // or not (contact_forces).
             if let Some(g) = obstacles[p.obstacle].gap(&x)
                 && g.h < 0.5 * self.search_distance
+                && !p.law.is_piecewise()
             {
                 return Err(Error::ContactMissed {
                     param: "lambda",
@@ -719,7 +741,9 @@ impl ContinuationProblem for ShellModel {
 
     /// Contact events: the gap of every candidate pair over the width of
     /// its law's switch, g = h / w (NormalLaw::switch_width); not finite
-    /// (ignored) where the gap is undefined.
+    /// (ignored) where the gap is undefined. For the penalty law w is the
+    /// smallest positive f64: g keeps the sign of h (its kinks, and the
+    /// switch count of steps.csv, read nothing else).
     fn events(&self, u: &[f64], lambda: f64) -> Result<Vec<f64>> {
         let full = self.expand(u, lambda);
         let obstacles = self.obstacles_at(lambda);
@@ -733,6 +757,12 @@ impl ContinuationProblem for ShellModel {
                     .map_or(f64::NAN, |g| g.h / p.law.switch_width())
             })
             .collect())
+    }
+
+    /// With the penalty law (eta = 0) the contact pairs' gaps are kinks:
+    /// every step ends just past the first sign change (series::kinks).
+    fn kinks(&self) -> bool {
+        self.pairs.iter().any(|p| p.law.is_piecewise())
     }
 
     /// With `contact_arclength` = c > 0: y = c ln(R + eta) of every active

@@ -91,7 +91,15 @@ impl ContinuationProblem for Spring {
         vec![self.law.delta]
     }
     fn events(&self, u: &[f64], _lambda: f64) -> Result<Vec<f64>> {
-        Ok(vec![(self.law.delta - u[0]) / self.law.switch_width()])
+        let h = self.law.delta - u[0];
+        Ok(vec![if self.law.is_piecewise() {
+            h
+        } else {
+            h / self.law.switch_width()
+        }])
+    }
+    fn kinks(&self) -> bool {
+        self.law.is_piecewise()
     }
 }
 
@@ -111,9 +119,14 @@ fn reference(law: &NormalLaw, lambda: f64) -> f64 {
 /// jump's chord corrected by Newton at their lambda (as the shell driver
 /// does for its output grid).
 fn solve(events: bool, arc: f64) -> (usize, usize, f64) {
+    solve_law(1e-6, events, arc)
+}
+
+/// [`solve`] with the law's eta (0: the penalty law R = max(0, -K h)).
+fn solve_law(eta: f64, events: bool, arc: f64) -> (usize, usize, f64) {
     let law = NormalLaw {
         k: 1e9,
-        eta: 1e-6,
+        eta,
         delta: 1e-4,
     };
     let spring = || Spring {
@@ -203,4 +216,34 @@ fn the_reaction_logarithm_in_the_arclength_crosses_the_event_in_fewer_steps() {
         "{log_steps} vs {plain_steps} steps"
     );
     assert!(log_err <= 1e-6, "{log_err:e}");
+}
+
+/// The penalty law (eta = 0): linear on each side of contact, so the series
+/// of each piece terminate and the engine ends a step at the kink
+/// (src/series/kinks.rs): one step to the contact at lambda = k_s delta / F
+/// = 0.1, one to lambda = 1. Against the closed form u = lambda F / k_s
+/// before contact and (lambda F + K delta) / (k_s + K) after it.
+#[test]
+fn the_penalty_law_takes_one_step_per_piece() {
+    let (steps, jumps, err) = solve_law(0.0, false, 0.0);
+    println!("penalty law: {steps} steps, error {err:.2e}");
+    assert_eq!(jumps, 0);
+    assert_eq!(steps, 2, "one step per piece of the law");
+    assert!(err <= 1e-12, "{err:e}");
+    let law = NormalLaw {
+        k: 1e9,
+        eta: 0.0,
+        delta: 1e-4,
+    };
+    for lambda in [0.05, 0.1, 0.3, 1.0] {
+        let closed = if lambda * F / KS <= law.delta {
+            lambda * F / KS
+        } else {
+            (lambda * F + law.k * law.delta) / (KS + law.k)
+        };
+        assert!(
+            (reference(&law, lambda) - closed).abs() <= 1e-15,
+            "lambda = {lambda}"
+        );
+    }
 }

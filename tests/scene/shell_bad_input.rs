@@ -389,6 +389,12 @@ fn fix_and_probe_key_errors_name_the_key() {
             vec!["solver.contact_arclength", "[0, 100]", "-1"],
         ),
         (
+            "eta-negative.toml",
+            "eta = 1e-6",
+            "eta = -1e-6",
+            vec!["contact.eta", ">= 0", "-0.000001"],
+        ),
+        (
             "group-box.toml",
             "box = [[1.0, -1.0, -1.0], [1.0, 1.0, 1.0]]",
             "box = [[5.0, -1.0, -1.0], [6.0, 1.0, 1.0]]",
@@ -398,6 +404,34 @@ fn fix_and_probe_key_errors_name_the_key() {
         let s = scene(name, &mesh_path(), &[(old, new)]);
         expect_err(load(&s), &needles);
     }
+}
+
+/// eta = 0 is the penalty law (contact::normal): accepted, without the
+/// contact arclength (its logarithm of R + eta has no meaning there), which
+/// may not be asked for.
+#[test]
+fn the_penalty_law_takes_no_contact_arclength() {
+    let s = scene("penalty.toml", &mesh_path(), &[("eta = 1e-6", "eta = 0.0")]);
+    let sc = load(&s).expect("eta = 0 is the penalty law");
+    assert_eq!(sc.contact.as_ref().map(|c| c.eta), Some(0.0));
+    assert_eq!(sc.contact_arclength, 0.0);
+    let s = scene(
+        "penalty-arclength.toml",
+        &mesh_path(),
+        &[
+            ("eta = 1e-6", "eta = 0.0"),
+            ("order = 15", "order = 15\ncontact_arclength = 1.0"),
+        ],
+    );
+    expect_err(
+        load(&s),
+        &[
+            "penalty-arclength.toml",
+            "solver.contact_arclength",
+            "contact.eta = 0",
+            "got 1",
+        ],
+    );
 }
 
 #[test]

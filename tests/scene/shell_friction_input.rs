@@ -96,6 +96,12 @@ fn bad_friction_values_name_the_key() {
         };
         expect_invalid(&p, key, problem);
     }
+    // The penalty law (eta = 0) is for frictionless scenes.
+    expect_invalid(
+        &scene("eta-zero.toml", &[("eta = 1e-6", "eta = 0.0")]),
+        "contact.eta",
+        "frictionless",
+    );
     // The range is stated: f >= 0, q in [0, 1].
     expect_invalid(
         &scene("nf.toml", &[("f = 0.2", "f = -0.1")]),
