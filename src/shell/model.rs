@@ -119,6 +119,13 @@ pub struct ShellModel {
     /// Weight c of the contact pairs' arc coordinates c ln(R + eta)
     /// (contact::log_reaction); 0: none.
     pub contact_arclength: f64,
+    /// Penalty law (eta = 0): the gap band |h| <= kink_band in which a pair
+    /// keeps the piece it started a step on (series::kinks): nodes resting
+    /// on the obstacle with reactions near zero sit at the kink within the
+    /// round-off of their position, and would switch at every step. Set so
+    /// that K kink_band, the force a pair may miss, is a tenth of the
+    /// residual test's (run::build).
+    pub kink_band: f64,
     active: Vec<usize>,
     // Series state of the current step.
     series_u0: Vec<f64>,
@@ -177,6 +184,7 @@ impl ShellModel {
             search_distance: f64::INFINITY,
             length_scale: 1.0,
             contact_arclength: 0.0,
+            kink_band: 0.0,
             active: vec![],
             series_u0: vec![],
             series_lambda0: f64::NAN,
@@ -741,9 +749,8 @@ impl ContinuationProblem for ShellModel {
 
     /// Contact events: the gap of every candidate pair over the width of
     /// its law's switch, g = h / w (NormalLaw::switch_width); not finite
-    /// (ignored) where the gap is undefined. For the penalty law w is the
-    /// smallest positive f64: g keeps the sign of h (its kinks, and the
-    /// switch count of steps.csv, read nothing else).
+    /// (ignored) where the gap is undefined. For the penalty law (w = 0)
+    /// g = h / kink_band: its kinks are crossings of |g| = 1 (series::kinks).
     fn events(&self, u: &[f64], lambda: f64) -> Result<Vec<f64>> {
         let full = self.expand(u, lambda);
         let obstacles = self.obstacles_at(lambda);
@@ -752,9 +759,13 @@ impl ContinuationProblem for ShellModel {
             .iter()
             .map(|p| {
                 let x = self.x0[p.node] + Self::vec3(&full, p.node, 0);
-                obstacles[p.obstacle]
-                    .gap(&x)
-                    .map_or(f64::NAN, |g| g.h / p.law.switch_width())
+                obstacles[p.obstacle].gap(&x).map_or(f64::NAN, |g| {
+                    if p.law.is_piecewise() && self.kink_band > 0.0 {
+                        g.h / self.kink_band
+                    } else {
+                        g.h / p.law.switch_width()
+                    }
+                })
             })
             .collect())
     }

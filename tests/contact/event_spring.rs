@@ -91,12 +91,9 @@ impl ContinuationProblem for Spring {
         vec![self.law.delta]
     }
     fn events(&self, u: &[f64], _lambda: f64) -> Result<Vec<f64>> {
-        let h = self.law.delta - u[0];
-        Ok(vec![if self.law.is_piecewise() {
-            h
-        } else {
-            h / self.law.switch_width()
-        }])
+        // The penalty law's width is the smallest positive f64: its band
+        // |g| <= 1 (series::kinks) is the exact kink.
+        Ok(vec![(self.law.delta - u[0]) / self.law.switch_width()])
     }
     fn kinks(&self) -> bool {
         self.law.is_piecewise()

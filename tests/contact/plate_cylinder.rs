@@ -184,8 +184,8 @@ fn ldlt_and_lu_follow_the_same_path() {
 /// Newton-Raphson on the same law (small arclength increments, |R|/|F| <=
 /// 1e-7) over the lambda grid, in at most a quarter of the steps of the
 /// former. Measured (the scene's N = 15 with Padé): 18 steps (13 ending at
-/// a kink) against 168 (Newton: 1,403); uz_A, rn_total within 6.1e-7,
-/// 3.7e-7 of eta = 1e-10 and 6.1e-7, 1.9e-7 of Newton.
+/// a kink) against 168 (Newton: 1,403); uz_A, rn_total within 5.9e-7,
+/// 3.4e-7 of eta = 1e-10 and 5.9e-7, 2.4e-7 of Newton.
 #[test]
 fn the_penalty_law_follows_the_small_eta_limit_in_a_quarter_of_the_steps() {
     let dir = std::env::temp_dir().join("anm-pc-penalty");
