@@ -53,8 +53,8 @@ pub trait ContinuationProblem {
     }
     /// Whether the problem is only piecewise analytic, its pieces meeting
     /// where an event function changes sign (default: no): the engine then
-    /// ends each step just past the first such sign change
-    /// ([`super::kinks`]) instead of jumping events.
+    /// ends each step just past the first event function that leaves its
+    /// band |g| <= 1 on the other side of its start ([`super::kinks`]).
     fn kinks(&self) -> bool {
         false
     }
