@@ -10,8 +10,7 @@
 //! At eta = 0 the law is the penalty law R = max(0, −K h), the limit of
 //! eq. (3) as eta → 0 (its switch width sqrt(eta delta / K) goes to 0): linear
 //! on each side of contact, only continuous at h = 0 ([`NormalLaw::is_piecewise`];
-//! the continuation engine ends its steps at the sign changes of h,
-//! series::kinks). Each function below takes the piece from the sign of h
+//! the continuation engine ends its steps at these kinks, series::kinks). Each function below takes the piece from the sign of h
 //! (h = 0: the open piece).
 
 use crate::series::Var;
@@ -133,8 +132,6 @@ mod tests {
         );
     }
 
-    /// r = R / (K w) against the closed form of r (r + g) = 1 in g = h / w
-    /// (the switch band of the law): r(0) = 1 up to the eta h term.
     /// eta = 0: R = max(0, -K h), its slope and its series on each piece,
     /// and eq. (3) at a small eta tends to it (the limit the penalty law is).
     #[test]
@@ -165,6 +162,8 @@ mod tests {
         }
     }
 
+    /// r = R / (K w) against the closed form of r (r + g) = 1 in g = h / w
+    /// (the switch band of the law): r(0) = 1 up to the eta h term.
     #[test]
     fn the_switch_width_makes_the_law_dimensionless() {
         let l = law();

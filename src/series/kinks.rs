@@ -26,7 +26,7 @@
 //! a tenth of the residual test's force). Without the band, nodes resting
 //! on the obstacle with reactions near zero, which sit at the kink within
 //! the round-off of their position, switch at every step (0.05 m
-//! plate-cylinder: 1,237 steps instead of 62). A g_k that is NaN (an
+//! plate-cylinder: 1,237 steps instead of 48). A g_k that is NaN (an
 //! undefined gap) takes its piece from the first sample where it is not. A
 //! node touching and lifting off within one sixteenth of a step is missed.
 
