@@ -426,10 +426,7 @@ impl ShellModel {
         let obstacles = self.obstacles_at(lambda);
         let mut left_out = vec![];
         if self.active.len() < self.pairs.len() && self.pairs.iter().any(|p| p.law.is_piecewise()) {
-            let mut is_active = vec![false; self.pairs.len()];
-            for &i in &self.active {
-                is_active[i] = true;
-            }
+            let is_active = self.active_mask();
             left_out = (0..self.pairs.len())
                 .filter(|&i| !is_active[i] && self.pairs[i].law.is_piecewise())
                 .collect();
@@ -539,10 +536,7 @@ impl ShellModel {
         if self.pairs.len() == self.active.len() {
             return Ok(());
         }
-        let mut is_active = vec![false; self.pairs.len()];
-        for &i in &self.active {
-            is_active[i] = true;
-        }
+        let is_active = self.active_mask();
         let obstacles = self.obstacles_at(lambda);
         for (i, p) in self.pairs.iter().enumerate() {
             if is_active[i] {
@@ -567,6 +561,15 @@ impl ShellModel {
             }
         }
         Ok(())
+    }
+
+    /// Per pair: whether it is in the active set.
+    fn active_mask(&self) -> Vec<bool> {
+        let mut is_active = vec![false; self.pairs.len()];
+        for &i in &self.active {
+            is_active[i] = true;
+        }
+        is_active
     }
 
     pub fn active_pairs(&self) -> &[usize] {
@@ -771,7 +774,7 @@ impl ContinuationProblem for ShellModel {
     }
 
     /// With the penalty law (eta = 0) the contact pairs' gaps are kinks:
-    /// every step ends just past the first sign change (series::kinks).
+    /// every step ends just past the first one (series::kinks).
     fn kinks(&self) -> bool {
         self.pairs.iter().any(|p| p.law.is_piecewise())
     }
