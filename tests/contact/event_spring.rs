@@ -244,3 +244,111 @@ fn the_penalty_law_takes_one_step_per_piece() {
         );
     }
 }
+
+/// Two springs like the one above side by side, their walls 1e-9 apart in
+/// gap: they touch at lambda = 0.1 and 0.1 (1 + 1e-9), as nodes mirrored
+/// across a symmetric shell do (~4e-11 apart, by round-off).
+struct TwoSprings {
+    laws: [NormalLaw; 2],
+}
+
+impl ContinuationProblem for TwoSprings {
+    fn ndof(&self) -> usize {
+        2
+    }
+    fn residual(&mut self, u: &[f64], lambda: f64) -> Result<Vec<f64>> {
+        Ok((0..2)
+            .map(|i| KS * u[i] + self.laws[i].force(self.laws[i].delta - u[i]) - lambda * F)
+            .collect())
+    }
+    fn tangent(&mut self, u: &[f64], _lambda: f64) -> Result<(SparseMatrix, Vec<f64>)> {
+        let k = |i: usize| KS - self.laws[i].stiffness(self.laws[i].delta - u[i]);
+        Ok((
+            SparseMatrix::from_dense(&[vec![k(0), 0.0], vec![0.0, k(1)]]),
+            vec![-F, -F],
+        ))
+    }
+    fn series_rhs(&mut self, p: usize, u: &[Vec<f64>], _lambda: &[f64]) -> Result<Vec<f64>> {
+        Ok((0..2)
+            .map(|i| {
+                let law = &self.laws[i];
+                // h_0..h_{p-1}, and h_p = 0 (its part is in the tangent).
+                let mut h: Vec<f64> = u[..p].iter().map(|x| -x[i]).collect();
+                h[0] += law.delta;
+                h.push(0.0);
+                let mut r = vec![law.force(h[0])];
+                for m in 1..=p {
+                    r.push(0.0);
+                    r[m] = law.force_coeff(&r, &h, m);
+                }
+                r[p]
+            })
+            .collect())
+    }
+    fn unknown_scale(&self) -> Vec<f64> {
+        vec![self.laws[0].delta; 2]
+    }
+    fn events(&self, u: &[f64], _lambda: f64) -> Result<Vec<f64>> {
+        Ok((0..2)
+            .map(|i| (self.laws[i].delta - u[i]) / self.laws[i].switch_width())
+            .collect())
+    }
+    fn kinks(&self) -> bool {
+        true
+    }
+}
+
+/// The penalty law on the two springs: one step per piece (3), and the
+/// step from the first kink to the second, 1e-10 long in lambda, computes
+/// orders 0..3 only (src/series/kinks.rs, "Few orders"): the kink lies
+/// within a quarter of the ratio-rule length of 3 orders. Against the closed
+/// form on every step end and on the lambda grid.
+#[test]
+fn a_kink_right_after_another_takes_a_step_of_few_orders() {
+    let law = |delta: f64| NormalLaw {
+        k: 1e9,
+        eta: 0.0,
+        delta,
+    };
+    let laws = [law(1e-4), law(1e-4 * (1.0 + 1e-9))];
+    let closed = |i: usize, lambda: f64| {
+        let l = &laws[i];
+        if lambda * F / KS <= l.delta {
+            lambda * F / KS
+        } else {
+            (lambda * F + l.k * l.delta) / (KS + l.k)
+        }
+    };
+    let mut problem = TwoSprings { laws };
+    let cfg = ContinuationConfig {
+        order: 15,
+        eps: 1e-8,
+        pade: true,
+        residual_tol: 1e-10,
+        ..Default::default()
+    };
+    let grid: Vec<f64> = (1..=20).map(|i| 0.05 * i as f64).collect();
+    let mut err: f64 = 0.0;
+    let mut orders = vec![];
+    let res = run(&mut problem, vec![0.0, 0.0], 0.0, &cfg, |step, _| {
+        orders.push((step.lambda_end - step.lambda[0], step.u.len() - 1));
+        let mut points: Vec<(Vec<f64>, f64)> = grid
+            .iter()
+            .filter_map(|&g| step.a_at_lambda(g).map(|a| step.eval(a)))
+            .collect();
+        points.push((step.u_end.clone(), step.lambda_end));
+        for (u, lambda) in points {
+            for (i, ui) in u.iter().enumerate() {
+                err = err.max((ui - closed(i, lambda)).abs() / 1e-4);
+            }
+        }
+        Ok(())
+    });
+    assert!(res.stop.is_end(), "{:?}", res.stop);
+    println!("steps (lambda span, orders): {orders:?}; error {err:.2e}");
+    assert_eq!(orders.len(), 3, "one step per piece: {orders:?}");
+    let (span, order) = orders[1];
+    assert!(span < 1e-9, "the second step spans {span:e}");
+    assert!(order <= 3, "the 1e-10 step computed {order} orders");
+    assert!(err <= 1e-12, "{err:e}");
+}
