@@ -74,7 +74,8 @@ enum Command {
         /// Values of zeta (normal-force regularization, eq. 11, N).
         #[arg(long, value_delimiter = ',')]
         zeta: Vec<f64>,
-        /// Values of eta (contact regularization, eq. 3, N).
+        /// Values of eta (contact regularization, eq. 3, N; on a shell
+        /// scene 0 is the penalty law, the limit eta -> 0).
         #[arg(long, value_delimiter = ',')]
         eta: Vec<f64>,
         /// Values of the penalty stiffness K (eq. 3, N/m).

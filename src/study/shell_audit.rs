@@ -83,10 +83,22 @@ pub fn with_parameter(scene: &ShellScene, parameter: &str, value: f64) -> Result
             if parameter == "omega" { 6 } else { 11 }
         )));
     }
-    if !(value.is_finite() && value > 0.0) {
-        return Err(bad(format!("values must be finite and > 0, got {value}")));
+    // eta = 0 is the penalty law R = max(0, -K h), the limit of eq. (3):
+    // the exact reference of an eta sweep (README, "The penalty law").
+    let least = if parameter == "eta" {
+        0.0
+    } else {
+        f64::MIN_POSITIVE
+    };
+    if !(value.is_finite() && value >= least) {
+        return Err(bad(if parameter == "eta" {
+            format!("values must be finite and >= 0 (0: the penalty law), got {value}")
+        } else {
+            format!("values must be finite and > 0, got {value}")
+        }));
     }
     let mut s = scene.clone();
+    let frictional = s.friction.is_some();
     let Some(ct) = s.contact.as_mut() else {
         return Err(bad("the scene has no contact law ([contact])".into()));
     };
@@ -94,6 +106,16 @@ pub fn with_parameter(scene: &ShellScene, parameter: &str, value: f64) -> Result
         "eta" => ct.eta = value,
         "penalty" => ct.k = value,
         _ => return Err(bad("unknown parameter".into())),
+    }
+    if ct.eta == 0.0 {
+        if frictional {
+            return Err(bad(
+                "0 (the penalty law) is for frictionless scenes: the scene has [friction]".into(),
+            ));
+        }
+        // The penalty law has no switch band for the contact arclength to
+        // stretch (solver.contact_arclength must be 0 with it).
+        s.contact_arclength = 0.0;
     }
     let (eta, k) = (ct.eta, ct.k);
     let delta = smallest_gap(&s);
@@ -616,11 +638,23 @@ mod tests {
             assert_eq!(key, format!("--{p}"));
             assert!(problem.contains("frictionless"), "{problem}");
         }
-        for v in [-1e-6, 0.0, f64::NAN, f64::INFINITY] {
+        for v in [-1e-6, f64::NAN, f64::INFINITY] {
             let (key, problem) = invalid(with_parameter(&sc, "eta", v));
             assert_eq!(key, "--eta");
+            assert!(problem.contains("finite and >= 0"), "{problem}");
+        }
+        for v in [-1.0, 0.0, f64::NAN] {
+            let (key, problem) = invalid(with_parameter(&sc, "penalty", v));
+            assert_eq!(key, "--penalty");
             assert!(problem.contains("finite and > 0"), "{problem}");
         }
+        // eta = 0: the penalty law, without the contact arclength.
+        assert!(sc.contact_arclength > 0.0);
+        let s = with_parameter(&sc, "eta", 0.0).unwrap();
+        assert_eq!(
+            (s.contact.as_ref().unwrap().eta, s.contact_arclength),
+            (0.0, 0.0)
+        );
         // Smallest initial gap 1e-4 m: K = 1e-3 N/m gives K delta = 1e-7 N < eta.
         let (key, problem) = invalid(with_parameter(&sc, "penalty", 1e-3));
         assert_eq!(key, "--penalty");

@@ -298,7 +298,7 @@ fn sweeps_item_by_item_merge_to_the_single_process_tables() {
             "audit",
             "scenes/plate-cylinder-coarse.toml",
             "--eta",
-            "1e-2,1e-1",
+            "1e-2,1e-1,0",
             "--penalty",
             "1e7,1e9",
         ],

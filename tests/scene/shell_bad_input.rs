@@ -488,7 +488,7 @@ fn audit_rejects_friction_options_and_bad_values() {
             vec!["--eta", "1e-6", "--zeta", "0.1"],
             vec!["--zeta", "frictionless"],
         ),
-        (vec!["--eta=-1e-6"], vec!["--eta", "finite and > 0"]),
+        (vec!["--eta=-1e-6"], vec!["--eta", "finite and >= 0"]),
         (
             vec!["--penalty", "nan"],
             vec!["--penalty", "finite and > 0"],
