@@ -281,7 +281,10 @@ impl<'p, P: ContinuationProblem> Path<'p, P> {
 const EARLY_KINK_ORDERS: [usize; 3] = [3, 6, 10];
 /// At a_p itself the truncation error is eps: the residual test failed at
 /// 34 step ends instead of 23 (0.025 m), so the kink must lie within a
-/// quarter of it (order p: eps / 4^p).
+/// quarter of it (order p: eps / 4^(p-1)), and a_p is taken at the
+/// smaller of eps and the residual test's tolerance (at eps = 1e-4, N =
+/// 20, with eps alone: 237 factorizations instead of 164 without early
+/// kinks; with the smaller one: 168, and 1,099 solves instead of 2,979).
 const EARLY_KINK_REACH: f64 = 0.25;
 
 /// The scaled terms T̃_p = (Ũ_p, λ̃_p, y_p) of orders 0..=p.
@@ -401,7 +404,8 @@ pub(crate) fn series_step<P: ContinuationProblem + ?Sized>(
         // A kink closer than the ratio-rule length of the orders so far:
         // the higher orders would not be used (super::kinks, "Few orders").
         if problem.kinks() && p < n_ord && EARLY_KINK_ORDERS.contains(&p) {
-            let (a_p, _) = ratio_length(&stacked(metric, &us, &ls, &ys), cfg.eps);
+            let tol = cfg.eps.min(cfg.residual_tol);
+            let (a_p, _) = ratio_length(&stacked(metric, &us, &ls, &ys), tol);
             let reach = EARLY_KINK_REACH * a_p;
             if let Some(a) = kinks::within_orders(problem, &us, &ls, reach)? {
                 early_kink = Some(a);
