@@ -58,6 +58,12 @@ pub trait ContinuationProblem {
     fn kinks(&self) -> bool {
         false
     }
+    /// The unknowns that [`Self::events`] reads (default: all). The kink
+    /// search evaluates only these on the step's series, dozens of times
+    /// per step: events must not read any other entry of `u`.
+    fn event_unknowns(&self) -> Option<Vec<usize>> {
+        None
+    }
     /// The number of series orders (N + 1) the steps will compute, told
     /// before each step's tangent: a problem may size its series buffers
     /// once instead of growing them order by order (default: ignored).
@@ -202,6 +208,31 @@ impl PathStep {
                     *ui = self.u.iter().rev().fold(0.0, |acc, t| acc * a + t[i]);
                 }
                 (u, super::taylor::eval(&self.lambda, a))
+            }
+        }
+    }
+
+    /// [`PathStep::eval`] at the unknowns `idx` only, written into `u`
+    /// (its other entries untouched; the same values, bit for bit);
+    /// returns lambda(a).
+    pub fn eval_at(&self, a: f64, idx: &[usize], u: &mut [f64]) -> f64 {
+        match &self.pade {
+            Some(p) => {
+                let w = p.weights(a);
+                for &i in idx {
+                    let mut inc = 0.0;
+                    for (f, t) in w.iter().zip(&self.u[1..]) {
+                        inc += f * t[i];
+                    }
+                    u[i] = self.u[0][i] + inc;
+                }
+                self.lambda_at(a)
+            }
+            None => {
+                for &i in idx {
+                    u[i] = self.u.iter().rev().fold(0.0, |acc, t| acc * a + t[i]);
+                }
+                super::taylor::eval(&self.lambda, a)
             }
         }
     }
@@ -406,5 +437,54 @@ mod tests {
         };
         assert!(mono.lambda_is_monotone());
         assert_eq!(mono.a_at_lambda_all(0.25).len(), 1);
+    }
+
+    /// `eval_at` gives `eval`'s values bit for bit at the unknowns asked,
+    /// polynomial and Padé, and leaves the others alone.
+    #[test]
+    fn eval_at_some_unknowns_matches_eval() {
+        // u_i(a) = sum_p c_i^p a^p with c_i = 0.3 (i + 1) / (i + 2): radius
+        // (i + 2) / (0.3 (i + 1)), a geometric series Padé represents.
+        let n_ord = 8;
+        let u: Vec<Vec<f64>> = (0..=n_ord)
+            .map(|p| {
+                (0..5)
+                    .map(|i| (0.3 * (i + 1) as f64 / (i + 2) as f64).powi(p as i32))
+                    .collect()
+            })
+            .collect();
+        let lambda: Vec<f64> = (0..=n_ord).map(|p| 0.5f64.powi(p as i32)).collect();
+        let mut terms = u.clone();
+        for (t, l) in terms.iter_mut().zip(&lambda) {
+            t.push(*l);
+        }
+        let pade = pade::range(&terms, n_ord, 1e-12, 0.1, 1.0).map(|p| p.1);
+        assert!(pade.is_some());
+        for pade in [None, pade] {
+            let step = PathStep {
+                index: 0,
+                u: u.clone(),
+                lambda: lambda.clone(),
+                length: 1.0,
+                a_poly: 1.0,
+                pade,
+                geometric: None,
+                end_residual: 0.0,
+                u_end: vec![],
+                lambda_end: 0.0,
+                negative_pivots: None,
+                jump: None,
+            };
+            for a in [0.0, 0.37, 1.0] {
+                let (full, l) = step.eval(a);
+                let mut some = vec![-7.0; 5];
+                let l_at = step.eval_at(a, &[1, 3], &mut some);
+                assert_eq!(l_at.to_bits(), l.to_bits());
+                for i in 0..5 {
+                    let want = if i == 1 || i == 3 { full[i] } else { -7.0 };
+                    assert_eq!(some[i].to_bits(), want.to_bits(), "a = {a}, u_{i}");
+                }
+            }
+        }
     }
 }

@@ -51,9 +51,21 @@ pub fn first_kink<P: ContinuationProblem + ?Sized>(
     problem: &P,
     step: &PathStep,
 ) -> Result<Option<f64>> {
-    let at = |a: f64| -> Result<Vec<f64>> {
-        let (u, l) = step.eval(a);
-        problem.events(&u, l)
+    // Only the unknowns the events read (the contact nodes' translations),
+    // in a buffer that keeps the others at their step-start values.
+    let unknowns = problem.event_unknowns();
+    let mut buffer = step.u[0].clone();
+    let mut at = |a: f64| -> Result<Vec<f64>> {
+        match &unknowns {
+            Some(idx) => {
+                let l = step.eval_at(a, idx, &mut buffer);
+                problem.events(&buffer, l)
+            }
+            None => {
+                let (u, l) = step.eval(a);
+                problem.events(&u, l)
+            }
+        }
     };
     // The piece of each function at the step start: g < 0 or g >= 0 (NaN:
     // unknown, the piece of its first sample that is not).

@@ -755,13 +755,17 @@ impl ContinuationProblem for ShellModel {
     /// (ignored) where the gap is undefined. For the penalty law (w = 0)
     /// g = h / kink_band: its kinks are crossings of |g| = 1 (series::kinks).
     fn events(&self, u: &[f64], lambda: f64) -> Result<Vec<f64>> {
-        let full = self.expand(u, lambda);
         let obstacles = self.obstacles_at(lambda);
+        // The pairs' nodes only (Self::event_unknowns), as `expand` would
+        // give them.
+        let value = |d: usize| self.free[d].map_or(lambda * self.prescribed[d], |i| u[i]);
         Ok(self
             .pairs
             .iter()
             .map(|p| {
-                let x = self.x0[p.node] + Self::vec3(&full, p.node, 0);
+                let (n, o) = (p.node, 0);
+                let x = self.x0[n]
+                    + Vec3::new(value(dof(n, o)), value(dof(n, o + 1)), value(dof(n, o + 2)));
                 obstacles[p.obstacle].gap(&x).map_or(f64::NAN, |g| {
                     if p.law.is_piecewise() && self.kink_band > 0.0 {
                         g.h / self.kink_band
@@ -771,6 +775,19 @@ impl ContinuationProblem for ShellModel {
                 })
             })
             .collect())
+    }
+
+    /// The free translations of the contact pairs' nodes: all that
+    /// [`Self::events`] reads.
+    fn event_unknowns(&self) -> Option<Vec<usize>> {
+        let mut idx: Vec<usize> = self
+            .pairs
+            .iter()
+            .flat_map(|p| (0..3).filter_map(move |c| self.free[dof(p.node, c)]))
+            .collect();
+        idx.sort_unstable();
+        idx.dedup();
+        Some(idx)
     }
 
     /// With the penalty law (eta = 0) the contact pairs' gaps are kinks:
