@@ -101,6 +101,29 @@ impl Obstacle {
         }
     }
 
+    /// The gap h of [`Obstacle::gap`] alone (its value bit for bit, without
+    /// the normal and its derivative): the kink search reads it dozens of
+    /// times per step for every contact pair.
+    pub fn distance(&self, x: &Vec3) -> Option<f64> {
+        match self {
+            Obstacle::Plane { point, normal } => Some((x - point).dot(normal)),
+            Obstacle::Cylinder {
+                centre,
+                axis,
+                radius,
+                crown,
+            } => {
+                let p = Matrix3::identity() - axis * axis.transpose();
+                let d = (p * (x - centre)).norm();
+                if d <= 1e-12 * radius {
+                    return None;
+                }
+                let s = axis.dot(&(x - centre));
+                Some(d - radius + crown * s * s)
+            }
+        }
+    }
+
     /// Gap and normal at x. None where the normal is undefined (a point on
     /// the cylinder axis).
     pub fn gap(&self, x: &Vec3) -> Option<Gap> {
@@ -335,10 +358,17 @@ mod tests {
     }
 
     /// dn/dx against central differences of n, and the gap's series along a
-    /// quadratic x(a) against the gap evaluated at x(a).
+    /// quadratic x(a) against the gap evaluated at x(a); `distance` is the
+    /// gap's h bit for bit.
     fn gap_derivatives_and_series_agree(cyl: &Obstacle) {
         let x = Vec3::new(1.3, 0.1, 0.2);
         let g = cyl.gap(&x).unwrap();
+        for y in [x, Vec3::new(1.0, 0.5, 0.0), Vec3::new(-0.7, 3.0, 0.9)] {
+            assert_eq!(
+                cyl.distance(&y).map(f64::to_bits),
+                cyl.gap(&y).map(|g| g.h.to_bits())
+            );
+        }
         for j in 0..3 {
             let mut e = Vec3::zeros();
             e[j] = 1e-6;

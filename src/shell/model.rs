@@ -763,14 +763,14 @@ impl ContinuationProblem for ShellModel {
             .pairs
             .iter()
             .map(|p| {
-                let (n, o) = (p.node, 0);
-                let x = self.x0[n]
-                    + Vec3::new(value(dof(n, o)), value(dof(n, o + 1)), value(dof(n, o + 2)));
-                obstacles[p.obstacle].gap(&x).map_or(f64::NAN, |g| {
+                let n = p.node;
+                let x =
+                    self.x0[n] + Vec3::new(value(dof(n, 0)), value(dof(n, 1)), value(dof(n, 2)));
+                obstacles[p.obstacle].distance(&x).map_or(f64::NAN, |h| {
                     if p.law.is_piecewise() && self.kink_band > 0.0 {
-                        g.h / self.kink_band
+                        h / self.kink_band
                     } else {
-                        g.h / p.law.switch_width()
+                        h / p.law.switch_width()
                     }
                 })
             })
