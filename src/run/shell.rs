@@ -807,6 +807,7 @@ fn secondary_start(
         max_iter: 30,
         jacobian: correct::Jacobian::Fresh,
         max_residual: f64::INFINITY,
+        line_search: false,
         step: step.index,
     };
     let constraint = correct::Constraint::Arclength {

@@ -208,6 +208,7 @@ struct RawSolver {
     newton_step: Option<f64>,
     newton_max_step: Option<f64>,
     newton_tol: Option<f64>,
+    newton_line_search: Option<bool>,
     linear_solver: Option<String>,
     branch: Option<String>,
     branch_direction: Option<f64>,
@@ -1801,6 +1802,7 @@ fn solver(c: &Checker, s: &RawSolver, size: f64) -> Result<(Method, Continuation
         ("solver.newton_step", s.newton_step.is_some()),
         ("solver.newton_max_step", s.newton_max_step.is_some()),
         ("solver.newton_tol", s.newton_tol.is_some()),
+        ("solver.newton_line_search", s.newton_line_search.is_some()),
     ];
     let anm_keys = [
         ("solver.order", s.order.is_some()),
@@ -1849,6 +1851,7 @@ fn solver(c: &Checker, s: &RawSolver, size: f64) -> Result<(Method, Continuation
                 lambda_end,
                 max_steps,
                 linear,
+                line_search: s.newton_line_search.unwrap_or(false),
                 ..Default::default()
             })
         }

@@ -200,6 +200,7 @@ pub fn jump<P: ContinuationProblem + ?Sized>(
                 scale,
             },
             max_residual: f64::INFINITY,
+            line_search: false,
             step: step.index,
         };
         let constraint = if at_end {

@@ -53,6 +53,9 @@ pub struct NewtonConfig {
     pub lambda_scale: f64,
     /// Linear-solver backend (as `ContinuationConfig::linear`).
     pub linear: Choice,
+    /// Backtracking on |R| after each correction
+    /// ([`super::correct::Settings::line_search`]).
+    pub line_search: bool,
 }
 
 impl Default for NewtonConfig {
@@ -69,6 +72,7 @@ impl Default for NewtonConfig {
             max_steps: 100_000,
             lambda_scale: 1.0,
             linear: Choice::Auto,
+            line_search: false,
         }
     }
 }
@@ -335,6 +339,7 @@ fn correct<P: ContinuationProblem>(
         max_iter: cfg.max_iterations,
         jacobian: Jacobian::Fresh,
         max_residual: f64::INFINITY,
+        line_search: cfg.line_search,
         step: index,
     };
     let c = correct::correct(

@@ -536,6 +536,7 @@ pub(crate) fn series_step<P: ContinuationProblem + ?Sized>(
                 scale,
             },
             max_residual: CORRECTABLE,
+            line_search: false,
             step: index,
         };
         let constraint = if at_end {

@@ -35,6 +35,8 @@ pub enum ShellMethod {
         control: Control,
         max_step: f64,
         tol: f64,
+        /// Backtracking on |R| after each correction (NewtonConfig).
+        line_search: bool,
     },
 }
 
@@ -44,10 +46,18 @@ impl ShellMethod {
             ShellMethod::Anm { order, pade, .. } => {
                 format!("ANM N={order}{}", if *pade { " Padé" } else { "" })
             }
-            ShellMethod::Newton { control, .. } => match control {
-                Control::Load => "Newton load".into(),
-                Control::Arclength => "Newton arclength".into(),
-            },
+            ShellMethod::Newton {
+                control,
+                line_search,
+                ..
+            } => format!(
+                "Newton {}{}",
+                match control {
+                    Control::Load => "load",
+                    Control::Arclength => "arclength",
+                },
+                if *line_search { " + line search" } else { "" }
+            ),
         }
     }
 
@@ -76,9 +86,11 @@ impl ShellMethod {
                 control,
                 max_step,
                 tol,
+                line_search,
             } => {
                 s.method = Method::Newton(NewtonConfig {
                     control: *control,
+                    line_search: *line_search,
                     initial_step: max_step.min(0.01),
                     max_step: *max_step,
                     tol: *tol,
@@ -99,7 +111,8 @@ pub fn solve(scene: &ShellScene, method: &ShellMethod) -> Result<RunReport> {
 
 /// The benchmark matrix: ANM N = 10, 15, 20 x eps 1e-4, 1e-6, 1e-8, with
 /// and without Padé; Newton by load control (increments up to 0.005 …
-/// 0.05) and arclength control, at |R| / |F| <= 1e-3 … 1e-7.
+/// 0.05) and arclength control, at |R| / |F| <= 1e-3 … 1e-7, and
+/// arclength control with a line search.
 pub fn methods() -> Vec<ShellMethod> {
     let mut m = vec![];
     for pade in [false, true] {
@@ -115,16 +128,20 @@ pub fn methods() -> Vec<ShellMethod> {
                 control: Control::Load,
                 max_step,
                 tol,
+                line_search: false,
             });
         }
     }
-    for max_step in [0.1, 1.0] {
-        for tol in [1e-4, 1e-6] {
-            m.push(ShellMethod::Newton {
-                control: Control::Arclength,
-                max_step,
-                tol,
-            });
+    for line_search in [false, true] {
+        for max_step in [0.1, 1.0] {
+            for tol in [1e-4, 1e-6] {
+                m.push(ShellMethod::Newton {
+                    control: Control::Arclength,
+                    max_step,
+                    tol,
+                    line_search,
+                });
+            }
         }
     }
     m
@@ -167,6 +184,7 @@ fn reference_at(scene: &ShellScene, tol: f64) -> Result<ShellReference> {
         control: Control::Load,
         max_step: 0.01,
         tol,
+        line_search: false,
     };
     let check = complete(solve(scene, &newton)?)?;
     let floor = uz_error(&check, &report);
