@@ -6,7 +6,8 @@
 //! [`ContinuationProblem`] as the ANM), so a comparison measures the method,
 //! not the implementation. Each step: predictor along the last secant (the
 //! tangent on the first step), then full Newton corrections, each with a fresh
-//! tangent and factorization, on
+//! tangent and factorization (optionally backtracked on |R|:
+//! `NewtonConfig::line_search`), on
 //!   load control:      R(U, lambda) = 0 with lambda fixed,
 //!   arclength control: R(U, lambda) = 0 and <U - U_p, t_U> + (lambda - lambda_p) t_l = 0
 //! (a hyperplane through the predictor, orthogonal to the prediction).
