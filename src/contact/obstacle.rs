@@ -113,12 +113,7 @@ impl Obstacle {
                 radius,
                 crown,
             } => {
-                let p = Matrix3::identity() - axis * axis.transpose();
-                let d = (p * (x - centre)).norm();
-                if d <= 1e-12 * radius {
-                    return None;
-                }
-                let s = axis.dot(&(x - centre));
+                let (_, _, d, s) = axis_frame(x, centre, axis, *radius)?;
                 Some(d - radius + crown * s * s)
             }
         }
@@ -139,14 +134,8 @@ impl Obstacle {
                 radius,
                 crown,
             } => {
-                let p = Matrix3::identity() - axis * axis.transpose();
-                let y = p * (x - centre);
-                let d = y.norm();
-                if d <= 1e-12 * radius {
-                    return None;
-                }
+                let (p, y, d, s) = axis_frame(x, centre, axis, *radius)?;
                 let nc = y / d;
-                let s = axis.dot(&(x - centre));
                 Some(Gap {
                     h: d - radius + crown * s * s,
                     n: nc + axis * (2.0 * crown * s),
@@ -155,6 +144,24 @@ impl Obstacle {
             }
         }
     }
+}
+
+/// A point x about a cylinder's axis: the projector P = I − a aᵀ, y = P (x
+/// − c), its distance d = |y| to the axis and its abscissa s = a·(x − c);
+/// None on the axis (d ≤ 1e-12 r), where the normal is undefined.
+fn axis_frame(
+    x: &Vec3,
+    centre: &Vec3,
+    axis: &Vec3,
+    radius: f64,
+) -> Option<(Matrix3<f64>, Vec3, f64, f64)> {
+    let p = Matrix3::identity() - axis * axis.transpose();
+    let y = p * (x - centre);
+    let d = y.norm();
+    if d <= 1e-12 * radius {
+        return None;
+    }
+    Some((p, y, d, axis.dot(&(x - centre))))
 }
 
 /// Series of the gap and normal of one point along an ANM step.

@@ -212,6 +212,25 @@ impl PathStep {
         }
     }
 
+    /// A step given by its series alone (polynomial, no end point yet):
+    /// orders 0..N of U and lambda, valid over (0, length].
+    pub fn from_series(u: Vec<Vec<f64>>, lambda: Vec<f64>, length: f64) -> Self {
+        PathStep {
+            index: 0,
+            u,
+            lambda,
+            length,
+            a_poly: length,
+            pade: None,
+            geometric: None,
+            end_residual: 0.0,
+            u_end: vec![],
+            lambda_end: 0.0,
+            negative_pivots: None,
+            jump: None,
+        }
+    }
+
     /// [`PathStep::eval`] at the unknowns `idx` only, written into `u`
     /// (its other entries untouched; the same values, bit for bit);
     /// returns lambda(a).
@@ -462,18 +481,8 @@ mod tests {
         assert!(pade.is_some());
         for pade in [None, pade] {
             let step = PathStep {
-                index: 0,
-                u: u.clone(),
-                lambda: lambda.clone(),
-                length: 1.0,
-                a_poly: 1.0,
                 pade,
-                geometric: None,
-                end_residual: 0.0,
-                u_end: vec![],
-                lambda_end: 0.0,
-                negative_pivots: None,
-                jump: None,
+                ..PathStep::from_series(u.clone(), lambda.clone(), 1.0)
             };
             for a in [0.0, 0.37, 1.0] {
                 let (full, l) = step.eval(a);

@@ -122,21 +122,10 @@ pub fn within_orders<P: ContinuationProblem + ?Sized>(
     lambda: &[f64],
     length: f64,
 ) -> Result<Option<f64>> {
-    let step = PathStep {
-        index: 0,
-        u: u.to_vec(),
-        lambda: lambda.to_vec(),
-        length,
-        a_poly: length,
-        pade: None,
-        geometric: None,
-        end_residual: 0.0,
-        u_end: vec![],
-        lambda_end: 0.0,
-        negative_pivots: None,
-        jump: None,
-    };
-    first_kink(problem, &step)
+    first_kink(
+        problem,
+        &PathStep::from_series(u.to_vec(), lambda.to_vec(), length),
+    )
 }
 
 /// The piece g < 0 (true) or g >= 0 (false); None where g is NaN (a gap
