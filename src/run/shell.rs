@@ -35,6 +35,9 @@ pub struct RunReport {
     pub mesh: String,
     pub nodes: usize,
     pub elements: usize,
+    /// Distinct element maps (shell::geometric_map::share): 1 on a
+    /// structured strip, up to `elements` on a distorted mesh.
+    pub element_maps: usize,
     pub dofs: usize,
     pub contact_candidates: usize,
     pub method: String,
@@ -715,6 +718,7 @@ fn run_inner(
         mesh: scene.mesh.file.display().to_string(),
         nodes: scene.mesh.nodes.len(),
         elements: scene.mesh.quads.len(),
+        element_maps: model.distinct_maps(),
         dofs: n_dof,
         contact_candidates: model.pairs.len(),
         method: method_name.to_string(),

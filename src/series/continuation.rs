@@ -34,6 +34,15 @@ pub trait ContinuationProblem {
     /// given the complete `u[0..p]`, `lambda[0..p]` of the current step. Called
     /// for p = 2, 3, ... in order.
     fn series_rhs(&mut self, p: usize, u: &[Vec<f64>], lambda: &[f64]) -> Result<Vec<f64>>;
+    /// Work toward `series_rhs(p, ..)` that reads only orders up to p − 2
+    /// (default: none), to run on another thread while the engine solves
+    /// for order p − 1: the engine starts it after `series_rhs(p − 1, ..)`
+    /// and waits for it before `series_rhs(p, ..)`, and the problem is not
+    /// touched meanwhile. A job that was not run, or was run for another
+    /// order, must leave `series_rhs` correct.
+    fn rhs_prepass(&mut self, _p: usize) -> Option<Box<dyn FnOnce() + Send + '_>> {
+        None
+    }
     /// Characteristic magnitude s_i of each unknown (default: all 1.0): e.g.
     /// a length of the model for displacements, 1 for rotations or director
     /// increments. The engine measures step lengths, series norms, Padé

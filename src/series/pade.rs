@@ -24,25 +24,29 @@ pub struct Pade {
     d: Vec<f64>,
 }
 
-impl Pade {
-    /// Uses the longest prefix W_1..W_n' (n' <= n) whose first n' - 1 terms are
-    /// numerically independent; returns `None` when fewer than 3 terms remain
-    /// (the polynomial should then be used).
-    pub fn new(terms: &[Vec<f64>], n: usize) -> Option<Self> {
+/// The modified Gram–Schmidt of W_1..W_n: W_k = Σ_{j≤min(k, n−1)} α_kj w*_j
+/// (+ a remainder ⊥ w*_1..w*_{n−1} for k = n), stopped at the first W_k
+/// (k ≤ n − 1) in the span of the previous ones.
+struct Orthogonalized {
+    /// α[k−1][j−1], k = 1..=n, j = 1..=min(k, n − 1).
+    alpha: Vec<Vec<f64>>,
+    /// The terms W_1..W_n used: n' ≤ n.
+    n: usize,
+}
+
+impl Orthogonalized {
+    /// Of W_1..W_n', n' ≤ n the longest prefix whose first n' − 1 terms are
+    /// numerically independent; `None` when fewer than 3 terms remain.
+    fn new(terms: &[Vec<f64>], n: usize) -> Option<Self> {
         if n < 3 {
             return None;
         }
         let m = n - 1;
         let mut basis: Vec<Vec<f64>> = Vec::with_capacity(m);
-        // alpha[k][j], k = 1..=n, j = 1..=min(k, m)  (1-based, stored 0-based).
         let mut alpha = vec![vec![0.0; m]; n];
         for k in 1..=n {
             let mut w = terms[k].clone();
-            let jmax = k.min(m);
-            for j in 1..=jmax {
-                if j == k {
-                    break;
-                }
+            for j in 1..k.min(m + 1) {
                 let a = dot(&w, &basis[j - 1]);
                 alpha[k - 1][j - 1] = a;
                 // Modified Gram-Schmidt: subtract as we go.
@@ -57,7 +61,11 @@ impl Pade {
                     // the approximant from W_1..W_k instead, whose W_k is
                     // then exactly represented by the basis.
                     return if k >= 3 && k < n {
-                        Self::new(terms, k)
+                        alpha.truncate(k);
+                        for row in &mut alpha {
+                            row.truncate(k - 1);
+                        }
+                        Some(Self { alpha, n: k })
                     } else {
                         None
                     };
@@ -66,20 +74,51 @@ impl Pade {
                 basis.push(w.iter().map(|x| x / nk).collect());
             }
         }
-        let al = |k: usize, j: usize| alpha[k - 1][j - 1];
+        Some(Self { alpha, n })
+    }
+
+    /// The approximant of W_1..W_p (3 ≤ p ≤ n), whose coefficients are
+    /// those of this orthogonalization's first p rows: the Gram–Schmidt of
+    /// a prefix is the prefix of the Gram–Schmidt.
+    fn pade(&self, p: usize) -> Option<Pade> {
+        if p < 3 || p > self.n {
+            return None;
+        }
+        let al = |k: usize, j: usize| self.alpha[k - 1][j - 1];
+        let m = p - 1;
         let mut d = Vec::with_capacity(m);
         for i in 1..=m {
-            let mut s = al(n, n - i);
+            let mut s = al(p, p - i);
             for j in 1..i {
-                s += d[j - 1] * al(n - j, n - i);
+                s += d[j - 1] * al(p - j, p - i);
             }
-            d.push(-s / al(n - i, n - i));
+            d.push(-s / al(p - i, p - i));
         }
-        if d.iter().all(|x| x.is_finite()) {
-            Some(Self { d })
-        } else {
-            None
-        }
+        d.iter().all(|x| x.is_finite()).then_some(Pade { d })
+    }
+
+    /// |Σ_k c_k W_k| for k ≤ n − 1, from the coordinates on the orthonormal
+    /// w*_j: no pass over the vectors.
+    fn norm_of(&self, c: &[f64]) -> f64 {
+        (1..self.n)
+            .map(|j| {
+                let cj: f64 = (j..=c.len())
+                    .map(|k| c[k - 1] * self.alpha[k - 1][j - 1])
+                    .sum();
+                cj * cj
+            })
+            .sum::<f64>()
+            .sqrt()
+    }
+}
+
+impl Pade {
+    /// Uses the longest prefix W_1..W_n' (n' <= n) whose first n' - 1 terms are
+    /// numerically independent; returns `None` when fewer than 3 terms remain
+    /// (the polynomial should then be used).
+    pub fn new(terms: &[Vec<f64>], n: usize) -> Option<Self> {
+        let o = Orthogonalized::new(terms, n)?;
+        o.pade(o.n)
     }
 
     /// Number n' of series terms the approximant is built from.
@@ -173,8 +212,9 @@ pub fn range(
     a_poly: f64,
     a_cap: f64,
 ) -> Option<(f64, Pade)> {
-    let pn = Pade::new(terms, n)?;
-    let pm = Pade::new(terms, pn.terms_used() - 1)?;
+    let o = Orthogonalized::new(terms, n)?;
+    let pn = o.pade(o.n)?;
+    let pm = o.pade(o.n - 1)?;
     let mut hi = a_cap;
     for p in [&pn, &pm] {
         if let Some(pole) = p.pole(a_cap) {
@@ -184,16 +224,16 @@ pub fn range(
     if hi <= a_poly {
         return Some((a_poly, pn));
     }
-    // P_n(a) and P_n(a) − P_{n−1}(a) in two buffers reused by the
-    // bisection's trials.
-    let (mut x, mut diff) = (vec![0.0; terms[1].len()], vec![0.0; terms[1].len()]);
-    let mut ok = |a: f64| {
-        pn.eval_into(terms, a, &mut x);
-        pm.eval_into(terms, a, &mut diff);
-        for (d, x) in diff.iter_mut().zip(&x) {
-            *d = x - *d;
+    // Both approximants are combinations of W_1..W_{n'−1} (the weights of
+    // P_{n−1} stop one term earlier): their norms come from the
+    // orthogonalization's coordinates, without a pass over the vectors.
+    let ok = |a: f64| {
+        let x = pn.weights(a);
+        let mut diff = x.clone();
+        for (d, g) in diff.iter_mut().zip(pm.weights(a)) {
+            *d -= g;
         }
-        norm(&diff) <= eps * norm(&x)
+        o.norm_of(&diff) <= eps * o.norm_of(&x)
     };
     if !ok(a_poly) {
         return Some((a_poly, pn));
@@ -250,5 +290,54 @@ mod tests {
         }
         let pole = p.pole(1.0).expect("pole");
         assert!((pole - 0.5).abs() < 1e-9, "pole {pole}");
+    }
+
+    /// Terms of a sum of 12 rational vector functions with poles at
+    /// a = 0.6 … 2.8: independent terms.
+    fn series_terms(n: usize, dim: usize) -> Vec<Vec<f64>> {
+        (0..=n)
+            .map(|k| {
+                (0..dim)
+                    .map(|i| {
+                        (0..12)
+                            .map(|s| {
+                                let c = (0.7 * (s * i) as f64 + s as f64).cos();
+                                c / (0.6 + 0.2 * s as f64).powi(k as i32)
+                            })
+                            .sum()
+                    })
+                    .collect()
+            })
+            .collect()
+    }
+
+    /// The approximant of a prefix from the full orthogonalization is the
+    /// one built from the prefix alone, bit for bit, and the norms from
+    /// coordinates are those of the evaluated vectors.
+    #[test]
+    fn one_orthogonalization_gives_both_approximants_and_their_norms() {
+        let (n, dim) = (10, 40);
+        let terms = series_terms(n, dim);
+        let o = Orthogonalized::new(&terms, n).expect("orthogonalized");
+        assert_eq!(o.n, n);
+        let alone = Pade::new(&terms, n - 1).expect("pade");
+        let prefix = o.pade(n - 1).expect("prefix");
+        assert_eq!(alone.d, prefix.d);
+        let pn = o.pade(n).expect("pade");
+        for a in [0.05, 0.2, 0.5] {
+            let (x, y) = (pn.eval(&terms, a), prefix.eval(&terms, a));
+            let diff: Vec<f64> = x.iter().zip(&y).map(|(x, y)| x - y).collect();
+            let w = pn.weights(a);
+            let mut dw = w.clone();
+            for (d, g) in dw.iter_mut().zip(prefix.weights(a)) {
+                *d -= g;
+            }
+            for (got, want) in [(o.norm_of(&w), norm(&x)), (o.norm_of(&dw), norm(&diff))] {
+                assert!(
+                    (got - want).abs() <= 1e-12 * norm(&x),
+                    "a = {a}: {got:e} against {want:e}"
+                );
+            }
+        }
     }
 }

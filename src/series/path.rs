@@ -391,7 +391,22 @@ pub(crate) fn series_step<P: ContinuationProblem + ?Sized>(
         };
         stats.series_terms += 1;
         charge(&mut stats.series_s, t);
-        let ub = solve(&rhs, stats, "order-p")?;
+        // The next order's inner terms, where the problem has some, on
+        // another thread during this solve; the time the solve waits for
+        // them is the series'.
+        let ub = match (p < n_ord).then(|| problem.rhs_prepass(p + 1)).flatten() {
+            None => solve(&rhs, stats, "order-p")?,
+            Some(job) => {
+                let t = Instant::now();
+                let solve_before = stats.solve_s;
+                let ub = rayon::in_place_scope(|s| {
+                    s.spawn(move |_| job());
+                    solve(&rhs, stats, "order-p")
+                });
+                stats.series_s += t.elapsed().as_secs_f64() - (stats.solve_s - solve_before);
+                ub?
+            }
+        };
         if let Some(c) = &arc {
             for (y, j) in yb.iter_mut().zip(c.apply(&ub, 0.0)) {
                 *y += j;

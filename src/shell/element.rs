@@ -30,6 +30,7 @@
 #![allow(clippy::needless_range_loop)]
 
 use nalgebra::{Matrix3, SMatrix};
+use std::sync::Arc;
 
 use super::geometric_map::GeometricMap;
 use super::kinematics::{
@@ -137,8 +138,9 @@ pub struct ShellElement {
     /// Thickness moments (t, t³/12) of the material matrix.
     moments: (f64, f64),
     /// The linear map M ↦ Kg(σ(E(M))) on packed symmetric matrices (see
-    /// [`ShellElement::packed_geometric`]), stored symmetric.
-    kmap: Box<GeometricMap>,
+    /// [`ShellElement::packed_geometric`]), stored symmetric; one copy for
+    /// all congruent elements (geometric_map::share).
+    kmap: Arc<GeometricMap>,
 }
 
 fn to_vec(m: &Matrix3<f64>) -> [f64; 6] {
@@ -239,9 +241,9 @@ impl ShellElement {
             gps,
             hinv,
             moments: (thickness, thickness * thickness * thickness / 12.0),
-            kmap: Box::new(GeometricMap::from_full(&FullMap::zeros())),
+            kmap: Arc::new(GeometricMap::from_full(&FullMap::zeros())),
         };
-        el.kmap = Box::new(GeometricMap::from_full(&el.geometric_map()));
+        el.kmap = Arc::new(GeometricMap::from_full(&el.geometric_map()));
         Ok(el)
     }
 
@@ -278,6 +280,17 @@ impl ShellElement {
         self.kmap.apply(m)
     }
 
+    /// The element's map (shared with the congruent elements once
+    /// geometric_map::share has run).
+    pub fn map(&self) -> &Arc<GeometricMap> {
+        &self.kmap
+    }
+
+    /// Replaces the map by an equal one (geometric_map::share).
+    pub fn set_map(&mut self, map: Arc<GeometricMap>) {
+        self.kmap = map;
+    }
+
     /// Prefetches the map (fe::prefetch).
     pub fn prefetch_map(&self) {
         self.kmap.prefetch();
@@ -292,9 +305,7 @@ impl ShellElement {
     /// Kg(σ) of the stresses at the state (x, d), computed pointwise from
     /// the full strains (no cancellation of the reference Gram matrix).
     pub fn state_geometric(&self, x: &[Vec3; 4], d: &[Vec3; 4]) -> Sym {
-        let xv = self.vectors(x, d);
-        let e_pt: [Strain; NPT] = std::array::from_fn(|i| strain(&xv[i], &self.ref_vec[i]));
-        self.geometric(&self.stresses(&e_pt).0)
+        self.geometric(&self.state_stresses(x, d).1)
     }
 
     /// The assumed strains at Gauss point `gi` from the sampling points.
@@ -331,18 +342,42 @@ impl ShellElement {
         std::array::from_fn(|i| points()[i].vectors(x, d))
     }
 
-    /// Condensed internal force f = ∫ Bᵀ s dA at current nodal positions
-    /// `x` and directors `d`. The tangent is the order-1 operator of the
-    /// element series ([`super::series::ElementSeries::tangent`]).
-    pub fn internal(&self, x: &[Vec3; 4], d: &[Vec3; 4]) -> [f64; NDOF_EL] {
+    /// [`ShellElement::internal`] and [`ShellElement::state_geometric`]
+    /// (packed) from one computation of the strains and stresses: the same
+    /// values as the two calls.
+    pub fn internal_and_geometric(
+        &self,
+        x: &[Vec3; 4],
+        d: &[Vec3; 4],
+    ) -> ([f64; NDOF_EL], PackedSym) {
+        let (xv, sig) = self.state_stresses(x, d);
+        (Self::force(&xv, &sig), pack(&self.geometric(&sig)))
+    }
+
+    /// The point vectors and the sampling-point stress weights at the
+    /// state (x, d), from the full strains.
+    fn state_stresses(&self, x: &[Vec3; 4], d: &[Vec3; 4]) -> ([PointVectors; NPT], [Strain; NPT]) {
         let xv = self.vectors(x, d);
         let e_pt: [Strain; NPT] = std::array::from_fn(|i| strain(&xv[i], &self.ref_vec[i]));
-        let (sig, _) = self.stresses(&e_pt);
+        let sig = self.stresses(&e_pt).0;
+        (xv, sig)
+    }
+
+    /// f = Σ Bᵀ σ over the sampling points.
+    fn force(xv: &[PointVectors; NPT], sig: &[Strain; NPT]) -> [f64; NDOF_EL] {
         let mut f = [0.0; NDOF_EL];
         for i in 0..NPT {
             points()[i].bt_sigma(&xv[i], &sig[i], &mut f);
         }
         f
+    }
+
+    /// Condensed internal force f = ∫ Bᵀ s dA at current nodal positions
+    /// `x` and directors `d`. The tangent is the order-1 operator of the
+    /// element series ([`super::series::ElementSeries::tangent`]).
+    pub fn internal(&self, x: &[Vec3; 4], d: &[Vec3; 4]) -> [f64; NDOF_EL] {
+        let (xv, sig) = self.state_stresses(x, d);
+        Self::force(&xv, &sig)
     }
 
     /// Membrane force resultant N (force per unit length) at the state:

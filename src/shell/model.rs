@@ -33,7 +33,8 @@
 #![allow(clippy::needless_range_loop)]
 
 use super::element::{ElementMatrix, ShellElement};
-use super::kinematics::{NDOF_EL, Vec3};
+use super::geometric_map;
+use super::kinematics::{NDOF_EL, PackedSym, Vec3};
 use super::material::Material;
 use super::series::ElementSeries;
 use crate::contact::Motion;
@@ -55,6 +56,9 @@ const TANGENT_CHUNK: usize = 4096;
 /// Fewest elements per parallel task: below, the dispatch costs more than
 /// the work (measured: the 40-element plate-cylinder ran 3× slower without).
 const PAR_MIN: usize = 256;
+/// Elements from which the series' inner terms are computed during the
+/// solves ([`ContinuationProblem::rhs_prepass`]).
+const PREPASS_MIN_ELEMENTS: usize = 1000;
 use crate::series::ContinuationProblem;
 use crate::series::continuation::ArcCoordinates;
 
@@ -132,6 +136,10 @@ pub struct ShellModel {
     series_lambda0: f64,
     el_series: Vec<ElementSeries>,
     pair_series: Vec<PairSeries>,
+    /// Distinct element maps after geometric_map::share.
+    distinct_maps: usize,
+    /// The full state of the last residual and each element's Kg_0 there.
+    state_kg: (Vec<f64>, Vec<PackedSym>),
     /// The tangent's pattern (element connectivity of the free dofs), built
     /// on the first tangent after the constraints are set, with each
     /// element's slots in it (empty if they do not fit 32 bits).
@@ -144,6 +152,11 @@ pub struct ShellModel {
 }
 
 impl ShellModel {
+    /// Distinct element maps (geometric_map::share).
+    pub fn distinct_maps(&self) -> usize {
+        self.distinct_maps
+    }
+
     /// Elements from quads (node indices), reference positions and unit
     /// directors. Element errors carry the element index.
     pub fn new(
@@ -167,6 +180,12 @@ impl ShellModel {
             .collect::<Vec<_>>()
             .into_iter()
             .collect::<Result<Vec<_>>>()?;
+        let mut elements = elements;
+        let mut maps: Vec<_> = elements.iter().map(|e| Arc::clone(e.map())).collect();
+        let distinct_maps = geometric_map::share(&mut maps);
+        for (e, map) in elements.iter_mut().zip(maps) {
+            e.set_map(map);
+        }
         let n = x0.len();
         let mut m = Self {
             x0,
@@ -190,6 +209,8 @@ impl ShellModel {
             series_lambda0: f64::NAN,
             el_series: vec![],
             pair_series: vec![],
+            distinct_maps,
+            state_kg: (vec![], vec![]),
             structure: None,
             slots: Vec::new(),
             orders: 0,
@@ -462,15 +483,50 @@ impl ShellModel {
 
     /// Full residual vector (all dofs, before removing the fixed ones).
     pub fn residual_full(&self, full: &[f64], lambda: f64) -> Result<Vec<f64>> {
+        self.residual_with(full, lambda, None)
+    }
+
+    /// [`ShellModel::residual_full`]; with `keep`, each element's Kg(σ) at
+    /// this state too (ShellElement::internal_and_geometric), which the
+    /// next series start at the same state takes instead of recomputing
+    /// the strains and stresses. Elements in parallel by chunks, their
+    /// forces added in element order (the sums of a sequential loop).
+    fn residual_with(
+        &self,
+        full: &[f64],
+        lambda: f64,
+        keep: Option<&mut Vec<PackedSym>>,
+    ) -> Result<Vec<f64>> {
+        let with_kg = keep.is_some();
+        let forces: Vec<Vec<([f64; NDOF_EL], Option<PackedSym>)>> = self
+            .elements
+            .par_chunks(PAR_MIN)
+            .map(|chunk| {
+                chunk
+                    .iter()
+                    .map(|e| {
+                        let (x, d) = self.element_state(e, full, false);
+                        if with_kg {
+                            let (f, kg) = e.internal_and_geometric(&x, &d);
+                            (f, Some(kg))
+                        } else {
+                            (e.internal(&x, &d), None)
+                        }
+                    })
+                    .collect()
+            })
+            .collect();
         let mut r = vec![0.0; full.len()];
-        for e in &self.elements {
-            let (x, d) = self.element_state(e, full, false);
-            let f = e.internal(&x, &d);
+        for (e, (f, _)) in self.elements.iter().zip(forces.iter().flatten()) {
             for (i, &n) in e.nodes.iter().enumerate() {
                 for k in 0..6 {
                     r[dof(n, k)] += f[6 * i + k];
                 }
             }
+        }
+        if let Some(kept) = keep {
+            kept.clear();
+            kept.extend(forces.iter().flatten().filter_map(|(_, kg)| *kg));
         }
         for (ri, fi) in r.iter_mut().zip(&self.dead) {
             *ri -= lambda * fi;
@@ -640,14 +696,21 @@ impl ShellModel {
         if self.el_series.len() == self.elements.len() {
             // Restarted in place: the last step's buffers are reused (no
             // allocation and release per element and step).
+            // Kg_0 from the last residual where it was at this state.
+            let kept = (self.state_kg.0 == full && self.state_kg.1.len() == self.elements.len())
+                .then_some(&self.state_kg.1);
             let mut series = std::mem::take(&mut self.el_series);
             series
                 .par_iter_mut()
+                .enumerate()
                 .zip(self.elements.par_iter())
                 .with_min_len(PAR_MIN)
-                .for_each(|(st, e)| {
+                .for_each(|((i, st), e)| {
                     let (x, d) = self.element_state(e, &full, false);
-                    st.restart(e, &x, &d);
+                    match kept {
+                        Some(kg) => st.restart_with(&x, &d, kg[i]),
+                        None => st.restart(e, &x, &d),
+                    }
                     st.reserve(self.orders);
                 });
             self.el_series = series;
@@ -834,7 +897,10 @@ impl ContinuationProblem for ShellModel {
     fn residual(&mut self, u: &[f64], lambda: f64) -> Result<Vec<f64>> {
         let full = self.expand(u, lambda);
         self.check_inactive(&full, lambda)?;
-        let r = self.residual_full(&full, lambda)?;
+        let mut kept = std::mem::take(&mut self.state_kg.1);
+        let r = self.residual_with(&full, lambda, Some(&mut kept));
+        self.state_kg = (full, kept);
+        let r = r?;
         Self::check_finite(&r, lambda, "residual")?;
         Ok(self.reduce(&r))
     }
@@ -952,6 +1018,25 @@ impl ContinuationProblem for ShellModel {
         Ok((k, self.reduce(&rl)))
     }
 
+    /// The elements' inner terms of order p (series::ElementSeries::prepare)
+    /// on one thread, while order p − 1 is solved on another: on large
+    /// models the solve is sequential and the elements stream their series
+    /// from memory, so the two overlap.
+    fn rhs_prepass(&mut self, p: usize) -> Option<Box<dyn FnOnce() + Send + '_>> {
+        if p < 4 || self.el_series.len() < PREPASS_MIN_ELEMENTS {
+            return None;
+        }
+        let series = &mut self.el_series;
+        Some(Box::new(move || {
+            for i in 0..series.len() {
+                if let Some(next) = series.get(i + 1) {
+                    next.prefetch_inner();
+                }
+                series[i].prepare(p);
+            }
+        }))
+    }
+
     fn series_rhs(&mut self, p: usize, u: &[Vec<f64>], lambda: &[f64]) -> Result<Vec<f64>> {
         let fresh = self.el_series.first().map_or(0, |s| s.orders());
         if fresh != p - 1 || self.series_u0 != u[0] || self.series_lambda0 != lambda[0] {
@@ -975,7 +1060,11 @@ impl ContinuationProblem for ShellModel {
                 (0..elements.len())
                     .map(|i| {
                         if let (Some(e), Some(st)) = (elements.get(i + 1), series.get(i + 1)) {
-                            st.prefetch(e);
+                            if st.has_ahead(p) {
+                                st.prefetch_outer(e);
+                            } else {
+                                st.prefetch(e);
+                            }
                         }
                         let e = &elements[i];
                         let (x, d) = Self::element_coefficients(e, &full);

@@ -44,6 +44,19 @@ pub struct ElementSeries {
     kg: Vec<PackedSym>,
     /// Kg*_p = K(M*_p) of the last right-hand side, with its order p.
     kg_star: Option<(usize, PackedSym)>,
+    /// The part of the order-q right-hand side computed ahead
+    /// ([`ElementSeries::prepare`]), with its order q.
+    ahead: Option<Ahead>,
+}
+
+/// The terms of the order-q right-hand side that do not read order q − 1
+/// nor order 1 on the left: M_inner = Σ_{r=2}^{q−2} Y_rᵀY_{q−r} and
+/// f_inner = Σ_{r=2}^{q−2} Y_r Kg_{q−r}.
+#[derive(Clone)]
+struct Ahead {
+    order: usize,
+    gram: PackedSym,
+    force: NodalVectors,
 }
 
 /// Σ_{r=lo}^{p−lo} Y_rᵀ Y_{p−r}, packed: each pair (r, p−r) once, and
@@ -97,6 +110,7 @@ impl ElementSeries {
             y: vec![],
             kg: vec![],
             kg_star: None,
+            ahead: None,
         };
         series.restart(e, x0, d0);
         series
@@ -116,6 +130,63 @@ impl ElementSeries {
         self.y.push(nodal_vectors(x0, d0));
         self.kg.push(pack(&e.state_geometric(x0, d0)));
         self.kg_star = None;
+        self.ahead = None;
+    }
+
+    /// [`ElementSeries::restart`] with Kg_0 = Kg(σ(x0, d0)) given (from
+    /// ShellElement::internal_and_geometric at the same state).
+    pub fn restart_with(&mut self, x0: &[Vec3; 4], d0: &[Vec3; 4], kg0: PackedSym) {
+        self.y.clear();
+        self.kg.clear();
+        self.y.push(nodal_vectors(x0, d0));
+        self.kg.push(kg0);
+        self.kg_star = None;
+        self.ahead = None;
+    }
+
+    /// The inner terms of the order-q right-hand side ([`Ahead`]), from
+    /// orders 2 … q − 2: computed while order q − 1 is being solved
+    /// (ContinuationProblem::rhs_prepass), they leave to
+    /// [`ElementSeries::complete_and_rhs`] only the terms with orders 0, 1
+    /// and q − 1 and the products with the element's map. Needs orders
+    /// 0 … q − 2 complete and q ≥ 4 (else nothing is done).
+    pub fn prepare(&mut self, q: usize) {
+        if q < 4 || self.y.len() != q - 1 {
+            return;
+        }
+        let gram = gram_convolution(&self.y, q, 2);
+        let mut force = NodalVectors::zeros();
+        for r in 2..=q - 2 {
+            add_product(&self.y[r], &self.kg[q - r], &mut force);
+        }
+        self.ahead = Some(Ahead {
+            order: q,
+            gram,
+            force,
+        });
+    }
+
+    /// Prefetches what [`ElementSeries::complete_and_rhs`] reads once the
+    /// inner terms are ready: orders 0 and 1, the inner terms, the map.
+    pub fn prefetch_outer(&self, e: &ShellElement) {
+        prefetch(&self.y[..2.min(self.y.len())]);
+        prefetch(&self.kg[..2.min(self.kg.len())]);
+        if let Some(a) = &self.ahead {
+            prefetch(std::slice::from_ref(a));
+        }
+        e.prefetch_map();
+    }
+
+    /// Prefetches what [`ElementSeries::prepare`] reads: the series'
+    /// orders, not the map.
+    pub fn prefetch_inner(&self) {
+        prefetch(&self.y);
+        prefetch(&self.kg);
+    }
+
+    /// Whether the inner terms of order q are ready.
+    pub fn has_ahead(&self, q: usize) -> bool {
+        self.ahead.as_ref().is_some_and(|a| a.order == q)
     }
 
     /// Prefetches the series' data and the element's map (fe::prefetch):
@@ -197,10 +268,25 @@ impl ElementSeries {
         let mut first = PackedSym::zeros();
         add_gram_pair(&self.y[0], &ym, &mut first);
         self.y.push(ym);
-        let (kg_first, kg_star) =
-            e.packed_geometric_pair(&first, &gram_convolution(&self.y, m + 1, 1));
+        let q = m + 1;
+        let Some(ahead) = self.ahead.take().filter(|a| a.order == q) else {
+            let (kg_first, kg_star) =
+                e.packed_geometric_pair(&first, &gram_convolution(&self.y, q, 1));
+            self.kg.push(kg_star_m + kg_first);
+            return self.force(q, kg_star);
+        };
+        // M*_q = M_inner + Y_1ᵀY_m + Y_mᵀY_1; f*_q = Y_0 K(M*_q) + Y_1 Kg_m
+        // + f_inner + Y_m Kg_1 (q ≥ 4: orders 1 and m differ).
+        let mut gram = ahead.gram;
+        add_gram_pair(&self.y[1], &self.y[m], &mut gram);
+        let (kg_first, kg_star) = e.packed_geometric_pair(&first, &gram);
         self.kg.push(kg_star_m + kg_first);
-        self.force(m + 1, kg_star)
+        let mut f = ahead.force;
+        add_product(&self.y[0], &kg_star, &mut f);
+        add_product(&self.y[1], &self.kg[m], &mut f);
+        add_product(&self.y[m], &self.kg[1], &mut f);
+        self.kg_star = Some((q, kg_star));
+        element_force(&f)
     }
 
     /// f*_p = Y_0 Kg*_p + Σ_{r=1}^{p−1} Y_r Kg_{p−r}, keeping Kg*_p for
