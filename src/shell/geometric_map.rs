@@ -14,6 +14,7 @@
 
 use super::kinematics::{NSYM, PackedSym, SYM_PAIRS};
 use nalgebra::SMatrix;
+use rayon::prelude::*;
 use std::collections::HashMap;
 use std::sync::Arc;
 
@@ -24,12 +25,15 @@ use std::sync::Arc;
 pub const SHARE_TOL: f64 = 1e-12;
 
 /// Bucket key: the scaled entries ([`GeometricMap::scaled`]) rounded to
-/// 2^-30, so that maps within [`SHARE_TOL`] nearly always share a bucket
-/// (one straddling a rounding boundary only misses the sharing).
-fn key(map: &GeometricMap) -> Vec<i64> {
+/// 2^-30 and hashed (FNV-1a), so that maps within [`SHARE_TOL`] nearly
+/// always share a bucket (one straddling a rounding boundary only misses
+/// the sharing; a collision only costs a comparison).
+fn key(map: &GeometricMap) -> u64 {
     map.scaled()
-        .map(|v| (v * f64::powi(2.0, 30)).round() as i64)
-        .collect()
+        .map(|v| (v * f64::powi(2.0, 30)).round() as i64 as u64)
+        .fold(0xcbf2_9ce4_8422_2325, |h, q| {
+            (h ^ q).wrapping_mul(0x0000_0100_0000_01b3)
+        })
 }
 
 /// One copy of equal maps: every map is replaced by the first earlier map
@@ -37,10 +41,11 @@ fn key(map: &GeometricMap) -> Vec<i64> {
 /// per order; shared, the few distinct maps stay in cache, and a million
 /// unknowns hold 0.5 GB less. Returns the number of distinct maps.
 pub fn share(maps: &mut [Arc<GeometricMap>]) -> usize {
-    let mut buckets: HashMap<Vec<i64>, Vec<Arc<GeometricMap>>> = HashMap::new();
+    let keys: Vec<u64> = maps.par_iter().with_min_len(256).map(|m| key(m)).collect();
+    let mut buckets: HashMap<u64, Vec<Arc<GeometricMap>>> = HashMap::new();
     let mut distinct = 0;
-    for map in maps.iter_mut() {
-        let bucket = buckets.entry(key(map)).or_default();
+    for (map, key) in maps.iter_mut().zip(keys) {
+        let bucket = buckets.entry(key).or_default();
         match bucket.iter().find(|m| m.distance(map) <= SHARE_TOL) {
             Some(m) => *map = Arc::clone(m),
             None => {
@@ -188,5 +193,59 @@ mod tests {
         assert!((ka - k * a).norm() <= 1e-14 * scale);
         assert!((kb - k * b).norm() <= 1e-14 * (k * b).norm());
         assert!((map.apply(&a) - k * a).norm() <= 1e-14 * scale);
+    }
+
+    /// Elements of a structured strip (the same rectangle translated) share
+    /// one map; a distorted element, a thicker one, or one of another
+    /// material keeps its own. The shared map is within SHARE_TOL of each
+    /// element's own.
+    #[test]
+    fn congruent_elements_share_one_map_and_others_keep_theirs() {
+        use crate::shell::kinematics::Vec3;
+        use crate::shell::{Material, ShellElement};
+        let steel = Material {
+            young: 2e11,
+            poisson: 0.3,
+        };
+        let soft = Material {
+            young: 7e10,
+            poisson: 0.33,
+        };
+        let d = [Vec3::new(0.0, 0.0, 1.0); 4];
+        let quad = |x0: f64, y0: f64, skew: f64, t: f64, m: &Material| {
+            let x = [
+                Vec3::new(x0, y0, 0.0),
+                Vec3::new(x0 + 0.005, y0, 0.0),
+                Vec3::new(x0 + 0.005 + skew, y0 + 0.005, 0.0),
+                Vec3::new(x0, y0 + 0.005, 0.0),
+            ];
+            ShellElement::new(0, [0, 1, 2, 3], &x, &d, t, m).expect("element")
+        };
+        let mut elements = vec![];
+        for i in 0..40 {
+            for j in 0..4 {
+                elements.push(quad(
+                    0.005 * i as f64 + 0.3,
+                    0.005 * j as f64 - 0.01,
+                    0.0,
+                    8e-4,
+                    &steel,
+                ));
+            }
+        }
+        let own: Vec<_> = elements.iter().map(|e| Arc::clone(e.map())).collect();
+        elements.push(quad(0.1, 0.0, 1e-4, 8e-4, &steel));
+        elements.push(quad(0.1, 0.0, 0.0, 9e-4, &steel));
+        elements.push(quad(0.1, 0.0, 0.0, 8e-4, &soft));
+        let mut maps: Vec<_> = elements.iter().map(|e| Arc::clone(e.map())).collect();
+        assert_eq!(share(&mut maps), 4);
+        for (m, o) in maps.iter().zip(&own) {
+            assert!(Arc::ptr_eq(m, &maps[0]));
+            assert!(m.distance(o) <= SHARE_TOL);
+        }
+        for m in &maps[160..] {
+            assert!(!Arc::ptr_eq(m, &maps[0]));
+            assert!(m.distance(&maps[0]) > 1e3 * SHARE_TOL);
+        }
     }
 }

@@ -401,9 +401,25 @@ mod tests {
                 ([Vec3::zeros(); 4], [Vec3::zeros(); 4])
             };
             let mut ahead = st.clone();
-            fused = Some(SVector::from_column_slice(
-                &ahead.complete_and_rhs(&e, &xp, &dp),
-            ));
+            let f = SVector::from_column_slice(&ahead.complete_and_rhs(&e, &xp, &dp));
+            // With the inner terms of order p + 1 computed beforehand (as
+            // during the solve of order p): the same right-hand side.
+            if p + 1 >= 4 {
+                let mut prepared = st.clone();
+                prepared.prepare(p + 1);
+                assert!(prepared.has_ahead(p + 1));
+                let g = SVector::<f64, NDOF_EL>::from_column_slice(
+                    &prepared.complete_and_rhs(&e, &xp, &dp),
+                );
+                let diff = (f - g).norm() / scale;
+                assert!(
+                    diff < 1e-14,
+                    "order {}: prepared right-hand side off by {diff:.3e}",
+                    p + 1
+                );
+                assert_eq!(prepared.kg[p], ahead.kg[p]);
+            }
+            fused = Some(f);
             st.complete(&e, &xp, &dp);
         }
     }
