@@ -383,6 +383,14 @@ fn main() -> ExitCode {
         libc::mallopt(libc::M_MMAP_MAX, 0);
         libc::mallopt(libc::M_TRIM_THRESHOLD, libc::c_int::MAX);
     }
+    // The main thread is one of the pool's threads: a parallel element loop
+    // started by the step then runs on it at once, instead of waiting for
+    // two pool threads to wake after a sequential factorization or solve
+    // (measured: one of them often came ~2 ms late, and the loop ran on one
+    // core; README, "Step cost and scaling").
+    let _ = rayon::ThreadPoolBuilder::new()
+        .use_current_thread()
+        .build_global();
     let cli = Cli::parse();
     // MPI lives for the whole process (feature mumps): every MUMPS instance
     // is dropped inside `dispatch`, before MPI_Finalize.
