@@ -30,7 +30,7 @@
 #![allow(clippy::needless_range_loop)]
 
 use nalgebra::{Matrix3, SMatrix};
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
 
 use super::geometric_map::GeometricMap;
 use super::kinematics::{
@@ -154,6 +154,13 @@ fn to_vec(m: &Matrix3<f64>) -> [f64; 6] {
     ]
 }
 
+/// The zero map every element holds before its own is set (one shared
+/// allocation).
+fn placeholder_map() -> Arc<GeometricMap> {
+    static ZERO: OnceLock<Arc<GeometricMap>> = OnceLock::new();
+    Arc::clone(ZERO.get_or_init(|| Arc::new(GeometricMap::from_full(&FullMap::zeros()))))
+}
+
 impl ShellElement {
     /// Builds the element from its reference nodes and unit directors.
     /// Errors name the element (0-based index `id`) for degenerate geometry.
@@ -165,6 +172,24 @@ impl ShellElement {
         thickness: f64,
         material: &Material,
     ) -> Result<Self> {
+        let (mut el, map) = Self::with_map_apart(id, nodes, x, a3, thickness, material)?;
+        el.kmap = Arc::new(map);
+        Ok(el)
+    }
+
+    /// [`ShellElement::new`] with the element's map returned by value and
+    /// not yet in the element (which holds a shared placeholder until
+    /// [`ShellElement::set_map`]): a model builds its elements in parallel
+    /// and then allocates one map per congruent class
+    /// (geometric_map::share), instead of one per element to be freed.
+    pub fn with_map_apart(
+        id: usize,
+        nodes: [usize; 4],
+        x: &[Vec3; 4],
+        a3: &[Vec3; 4],
+        thickness: f64,
+        material: &Material,
+    ) -> Result<(Self, GeometricMap)> {
         let pts = points();
         let ref_vec: Vec<PointVectors> = pts.iter().map(|p| p.vectors(x, a3)).collect();
         let centre = Point::new(0.0, 0.0).vectors(x, a3);
@@ -235,16 +260,16 @@ impl ShellElement {
             element: id,
             problem: "singular EAS matrix H".into(),
         })?;
-        let mut el = Self {
+        let el = Self {
             nodes,
             ref_vec,
             gps,
             hinv,
             moments: (thickness, thickness * thickness * thickness / 12.0),
-            kmap: Arc::new(GeometricMap::from_full(&FullMap::zeros())),
+            kmap: placeholder_map(),
         };
-        el.kmap = Arc::new(GeometricMap::from_full(&el.geometric_map()));
-        Ok(el)
+        let map = GeometricMap::from_full(&el.geometric_map());
+        Ok((el, map))
     }
 
     /// Column k: Kg(σ(E(M))) for M the k-th unit symmetric matrix, through
