@@ -182,7 +182,7 @@ impl ShellModel {
             .collect::<Result<Vec<_>>>()?;
         // The maps are allocated once per congruent class, here, on this
         // thread: not one per element on the pool's threads and then freed
-        // (their holes between this thread's large blocks cost 0.7 GB of
+        // (their holes between this thread's large blocks cost 0.58 GB of
         // peak at a million unknowns).
         let (mut elements, maps): (Vec<ShellElement>, Vec<_>) = built.into_iter().unzip();
         let (maps, distinct_maps) = geometric_map::share(maps);
