@@ -501,26 +501,34 @@ impl ShellModel {
         keep: Option<&mut Vec<PackedSym>>,
     ) -> Result<Vec<f64>> {
         let with_kg = keep.is_some();
-        let forces: Vec<Vec<([f64; NDOF_EL], Option<PackedSym>)>> = self
-            .elements
-            .par_chunks(PAR_MIN)
-            .map(|chunk| {
-                chunk
-                    .iter()
-                    .map(|e| {
+        // Into buffers allocated here (see series_rhs).
+        let mut forces = vec![[0.0; NDOF_EL]; self.elements.len()];
+        let mut kgs = vec![PackedSym::zeros(); if with_kg { self.elements.len() } else { 0 }];
+        let elements = self.elements.par_chunks(PAR_MIN);
+        if with_kg {
+            forces
+                .par_chunks_mut(PAR_MIN)
+                .zip(kgs.par_chunks_mut(PAR_MIN))
+                .zip(elements)
+                .for_each(|((out, kg_out), chunk)| {
+                    for ((f, kg), e) in out.iter_mut().zip(kg_out).zip(chunk) {
                         let (x, d) = self.element_state(e, full, false);
-                        if with_kg {
-                            let (f, kg) = e.internal_and_geometric(&x, &d);
-                            (f, Some(kg))
-                        } else {
-                            (e.internal(&x, &d), None)
-                        }
-                    })
-                    .collect()
-            })
-            .collect();
+                        (*f, *kg) = e.internal_and_geometric(&x, &d);
+                    }
+                });
+        } else {
+            forces
+                .par_chunks_mut(PAR_MIN)
+                .zip(elements)
+                .for_each(|(out, chunk)| {
+                    for (f, e) in out.iter_mut().zip(chunk) {
+                        let (x, d) = self.element_state(e, full, false);
+                        *f = e.internal(&x, &d);
+                    }
+                });
+        }
         let mut r = vec![0.0; full.len()];
-        for (e, (f, _)) in self.elements.iter().zip(forces.iter().flatten()) {
+        for (e, f) in self.elements.iter().zip(&forces) {
             for (i, &n) in e.nodes.iter().enumerate() {
                 for k in 0..6 {
                     r[dof(n, k)] += f[6 * i + k];
@@ -528,8 +536,7 @@ impl ShellModel {
             }
         }
         if let Some(kept) = keep {
-            kept.clear();
-            kept.extend(forces.iter().flatten().filter_map(|(_, kg)| *kg));
+            *kept = kgs;
         }
         for (ri, fi) in r.iter_mut().zip(&self.dead) {
             *ri -= lambda * fi;
@@ -1055,30 +1062,31 @@ impl ContinuationProblem for ShellModel {
         // data while it computes (fe::prefetch); summed in element order
         // (the same sums as a sequential loop).
         let full = self.expand(&u[p - 1], lambda[p - 1]);
-        let forces: Vec<Vec<[f64; NDOF_EL]>> = self
-            .elements
-            .par_chunks(PAR_MIN)
+        // Into one buffer allocated here, on this thread: blocks allocated
+        // on the pool's threads (the main thread is one of them) would
+        // split the large free blocks of this thread's heap.
+        let mut forces = vec![[0.0; NDOF_EL]; self.elements.len()];
+        forces
+            .par_chunks_mut(PAR_MIN)
+            .zip(self.elements.par_chunks(PAR_MIN))
             .zip(self.el_series.par_chunks_mut(PAR_MIN))
-            .map(|(elements, series)| {
-                (0..elements.len())
-                    .map(|i| {
-                        if let (Some(e), Some(st)) = (elements.get(i + 1), series.get(i + 1)) {
-                            if st.has_ahead(p) {
-                                st.prefetch_outer(e);
-                            } else {
-                                st.prefetch(e);
-                            }
+            .for_each(|((out, elements), series)| {
+                for i in 0..elements.len() {
+                    if let (Some(e), Some(st)) = (elements.get(i + 1), series.get(i + 1)) {
+                        if st.has_ahead(p) {
+                            st.prefetch_outer(e);
+                        } else {
+                            st.prefetch(e);
                         }
-                        let e = &elements[i];
-                        let (x, d) = Self::element_coefficients(e, &full);
-                        series[i].complete_and_rhs(e, &x, &d)
-                    })
-                    .collect()
-            })
-            .collect();
+                    }
+                    let e = &elements[i];
+                    let (x, d) = Self::element_coefficients(e, &full);
+                    out[i] = series[i].complete_and_rhs(e, &x, &d);
+                }
+            });
         self.complete_pairs(&full, lambda[p - 1]);
         let mut rhs = vec![0.0; self.free.len()];
-        for (e, f) in self.elements.iter().zip(forces.iter().flatten()) {
+        for (e, f) in self.elements.iter().zip(&forces) {
             for (i, &n) in e.nodes.iter().enumerate() {
                 for k in 0..6 {
                     rhs[dof(n, k)] += f[6 * i + k];
