@@ -133,23 +133,25 @@ impl GeometricMap {
     /// positive semidefinite, so these are at most 1 in magnitude, and the
     /// bending entries (t³/12) are measured against bending, not membrane.
     fn scaled(&self) -> impl Iterator<Item = f64> + '_ {
+        self.p.iter().zip(self.scales()).map(|(v, s)| v / s)
+    }
+
+    /// sqrt(P_ii P_jj) of each stored entry P_ij (at least the smallest
+    /// positive number).
+    fn scales(&self) -> impl Iterator<Item = f64> + '_ {
         let diag = |j: usize| self.p[j * (j + 1) / 2 + j].abs();
         (0..NSYM)
-            .flat_map(move |j| (0..=j).map(move |i| (i, j)))
-            .zip(&self.p)
-            .map(move |((i, j), v)| v / (diag(i) * diag(j)).sqrt().max(f64::MIN_POSITIVE))
+            .flat_map(|j| (0..=j).map(move |i| (i, j)))
+            .map(move |(i, j)| (diag(i) * diag(j)).sqrt().max(f64::MIN_POSITIVE))
     }
 
     /// Largest |P_ij − Q_ij| / sqrt(P_ii P_jj).
     pub fn distance(&self, other: &Self) -> f64 {
-        let q = GeometricMap {
-            p: std::array::from_fn(|k| self.p[k] - other.p[k]),
-        };
-        let diag = |j: usize| self.p[j * (j + 1) / 2 + j].abs();
-        (0..NSYM)
-            .flat_map(|j| (0..=j).map(move |i| (i, j)))
-            .zip(&q.p)
-            .map(|((i, j), v)| v.abs() / (diag(i) * diag(j)).sqrt().max(f64::MIN_POSITIVE))
+        self.p
+            .iter()
+            .zip(&other.p)
+            .zip(self.scales())
+            .map(|((p, q), s)| (p - q).abs() / s)
             .fold(0.0, f64::max)
     }
 

@@ -125,12 +125,7 @@ impl ElementSeries {
 
     /// Order 0 at the state (x0, d0), in the buffers of an earlier series.
     pub fn restart(&mut self, e: &ShellElement, x0: &[Vec3; 4], d0: &[Vec3; 4]) {
-        self.y.clear();
-        self.kg.clear();
-        self.y.push(nodal_vectors(x0, d0));
-        self.kg.push(pack(&e.state_geometric(x0, d0)));
-        self.kg_star = None;
-        self.ahead = None;
+        self.restart_with(x0, d0, pack(&e.state_geometric(x0, d0)));
     }
 
     /// [`ElementSeries::restart`] with Kg_0 = Kg(σ(x0, d0)) given (from
