@@ -25,7 +25,7 @@ pub use solver::{
     BACKWARD_ERROR_LIMIT, Backend, Choice, Factorization, LinearSolver, SYMMETRY_TOLERANCE,
     SolverStats, is_symmetric,
 };
-pub use sparse_matrix::{SparseMatrix, Structure};
+pub use sparse_matrix::{ColumnBlock, SparseMatrix, Structure};
 
 /// Euclidean inner product.
 pub fn dot(a: &[f64], b: &[f64]) -> f64 {

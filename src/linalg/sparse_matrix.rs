@@ -147,6 +147,14 @@ impl Structure {
 /// A square sparse matrix under assembly. With a [`Structure`], `add` sums
 /// into the slot of (row, col) (binary search in the column); positions
 /// outside it, and every position without one, are kept as triplets.
+/// Columns `cols` of a [`SparseMatrix`] on a pattern: their stored values,
+/// the first of which is the pattern's slot `first_slot`.
+pub struct ColumnBlock<'a> {
+    pub cols: std::ops::Range<usize>,
+    pub first_slot: usize,
+    pub values: &'a mut [f64],
+}
+
 #[derive(Clone, Debug, Default)]
 pub struct SparseMatrix {
     pub n: usize,
@@ -225,6 +233,49 @@ impl SparseMatrix {
             .zip(values)
         {
             *v += x;
+        }
+    }
+
+    /// The stored values split into `parts` blocks of whole columns with
+    /// about equal numbers of entries, so that threads can add to disjoint
+    /// columns at once; `None` without a pattern.
+    pub fn column_blocks(&mut self, parts: usize) -> Option<Vec<ColumnBlock<'_>>> {
+        let s = self.structure.as_deref()?;
+        let nnz = s.nnz();
+        let parts = parts.clamp(1, s.n.max(1));
+        let mut blocks = Vec::with_capacity(parts);
+        let mut rest = self.values.as_mut_slice();
+        let mut first_col = 0;
+        for part in 1..=parts {
+            let last_col = if part == parts {
+                s.n
+            } else {
+                // The first column boundary at or past part / parts of the entries.
+                let target = nnz * part / parts;
+                first_col + s.col_ptr[first_col..=s.n].partition_point(|&p| p < target)
+            };
+            let first_slot = s.col_ptr[first_col];
+            let (values, tail) = rest.split_at_mut(s.col_ptr[last_col] - first_slot);
+            rest = tail;
+            blocks.push(ColumnBlock {
+                cols: first_col..last_col,
+                first_slot,
+                values,
+            });
+            first_col = last_col;
+        }
+        Some(blocks)
+    }
+
+    /// The first entry that is not finite, if any (a scan of the stored
+    /// values first: the entries' positions are looked up only then).
+    pub fn first_non_finite(&self) -> Option<(usize, usize, f64)> {
+        let finite =
+            self.values.iter().all(|v| v.is_finite()) && self.extra.iter().all(|t| t.2.is_finite());
+        if finite {
+            None
+        } else {
+            self.entries().find(|t| !t.2.is_finite())
         }
     }
 
@@ -331,5 +382,42 @@ mod tests {
         assert_eq!(s1.id(), s2.id());
         assert_eq!(*v, [4.0, 1.0]);
         assert!(Structure::from_coords(2, [(2, 0)]).is_err());
+    }
+
+    #[test]
+    fn column_blocks_split_the_values_by_whole_columns() {
+        // Column j holds rows 0..=j: 55 entries over 10 columns.
+        let n = 10;
+        let s = Arc::new(
+            Structure::from_coords(n, (0..n).flat_map(|j| (0..=j).map(move |i| (i, j)))).unwrap(),
+        );
+        let mut a = SparseMatrix::with_structure(Arc::clone(&s));
+        for parts in 1..=4 {
+            let blocks = a.column_blocks(parts).unwrap();
+            assert_eq!(blocks.len(), parts);
+            let (mut col, mut slot) = (0, 0);
+            for b in &blocks {
+                assert_eq!((b.cols.start, b.first_slot), (col, slot));
+                assert_eq!(
+                    b.values.len(),
+                    s.col_ptr()[b.cols.end] - s.col_ptr()[b.cols.start]
+                );
+                (col, slot) = (b.cols.end, slot + b.values.len());
+            }
+            assert_eq!((col, slot), (n, s.nnz()));
+            // No block holds more than its share and one column (10 entries).
+            assert!(blocks.iter().all(|b| b.values.len() <= 55 / parts + 10));
+        }
+        // Writing through the blocks writes the matrix.
+        for b in a.column_blocks(3).unwrap() {
+            for v in b.values.iter_mut() {
+                *v = b.cols.start as f64;
+            }
+        }
+        // Boundaries at 21 and 36 entries: columns 0..6, 6..8, 8..10.
+        assert_eq!(a.values[s.slot(9, 9).unwrap()], 8.0);
+        assert_eq!(a.values[s.slot(0, 6).unwrap()], 6.0);
+        assert_eq!(a.values[0], 0.0);
+        assert!(SparseMatrix::new(3).column_blocks(2).is_none());
     }
 }

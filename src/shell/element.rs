@@ -47,6 +47,12 @@ pub type ElementMatrix = SMatrix<f64, NDOF_EL, NDOF_EL>;
 
 /// The full map K on packed matrices (GeometricMap stores it as S P).
 type FullMap = SMatrix<f64, NSYM, NSYM>;
+/// The full map of the last element that asked for it: congruent elements
+/// share one map (geometric_map::share), so a loop over the elements
+/// unpacks it once per run of elements that share it.
+#[derive(Default)]
+pub struct FullMapCache(Option<(Arc<GeometricMap>, Box<FullMap>)>);
+
 /// Packed Kg of the Gram change YᵀδY + δYᵀY, per unknown of Y.
 pub type GramJacobian = SMatrix<f64, NSYM, NDOF_Y>;
 
@@ -429,16 +435,26 @@ impl ShellElement {
         n / area
     }
 
+    /// The full map K, unpacked unless `cache` holds this element's map.
+    fn full_map<'c>(&self, cache: &'c mut FullMapCache) -> &'c FullMap {
+        let (map, full) = match cache.0.take() {
+            Some((map, full)) if Arc::ptr_eq(&map, &self.kmap) => (map, full),
+            _ => (Arc::clone(&self.kmap), Box::new(self.kmap.full())),
+        };
+        &cache.0.insert((map, full)).1
+    }
+
     /// The linear map from the unknowns δY of Y to the packed
     /// K(YᵀδY + δYᵀY): the change of Kg(σ) along δY at the nodal vectors Y.
     /// The column of the unknown (dim, b) has YᵀδY + δYᵀY nonzero in row
     /// and column b only, so it sums 7 of the 28 columns of K.
-    pub fn gram_jacobian(&self, y: &NodalVectors) -> GramJacobian {
-        let kmap = self.kmap.full();
+    pub fn gram_jacobian(&self, y: &NodalVectors, cache: &mut FullMapCache) -> GramJacobian {
+        let kmap = self.full_map(cache).as_slice();
         let mut t = GramJacobian::zeros();
-        for b in 0..NCOL {
-            for dim in 0..3 {
-                let mut col = PackedSym::zeros();
+        for (b, out) in t.as_mut_slice().chunks_exact_mut(3 * NSYM).enumerate() {
+            for (dim, out) in out.chunks_exact_mut(NSYM).enumerate() {
+                // Summed in registers over the 7 columns of K it draws on.
+                let mut acc = [0.0; NSYM];
                 for a in 0..NCOL {
                     // (YᵀδY + δYᵀY)_ab = Y[dim, a], doubled on the diagonal.
                     let w = if a == b {
@@ -446,9 +462,12 @@ impl ShellElement {
                     } else {
                         y[(dim, a)]
                     };
-                    col.axpy(w, &kmap.column(SYM_INDEX[a][b]), 1.0);
+                    let col = &kmap[SYM_INDEX[a][b] * NSYM..][..NSYM];
+                    for (o, c) in acc.iter_mut().zip(col) {
+                        *o += w * c;
+                    }
                 }
-                t.set_column(3 * b + dim, &col);
+                out.copy_from_slice(&acc);
             }
         }
         t

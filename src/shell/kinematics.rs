@@ -141,18 +141,41 @@ pub fn element_force(fy: &NodalVectors) -> [f64; NDOF_EL] {
     })
 }
 
-/// Element matrix from a matrix on Y: K_q = Sᵀ K_Y S.
+/// Element matrix from a matrix on Y: K_q = Sᵀ K_Y S. S copies every
+/// element unknown to one Y unknown except v_0, which enters the three
+/// differences with −1: its rows and columns are minus the sums of three.
 pub fn element_matrix(ky: &YMatrix) -> SMatrix<f64, NDOF_EL, NDOF_EL> {
-    let mut ks = SMatrix::<f64, NDOF_Y, NDOF_EL>::zeros();
-    for (b, &(first, count, sign)) in Y_DOFS.iter().enumerate() {
-        for m in 0..count {
-            ks.column_mut(b).axpy(sign, &ky.column(first + 3 * m), 1.0);
+    let y = ky.as_slice();
+    // Entry a of S^T v for a vector v on Y.
+    let gather = |v: &[f64], a: usize| {
+        let (first, count, _) = Y_DOFS[a];
+        if count == 1 {
+            v[first]
+        } else {
+            -(v[first] + v[first + 3] + v[first + 6])
+        }
+    };
+    // Columns of K_Y S: column b of K_Y S is K_Y (S e_b).
+    let mut ks = [[0.0; NDOF_Y]; NDOF_EL];
+    for (b, kb) in ks.iter_mut().enumerate() {
+        let (first, count, _) = Y_DOFS[b];
+        let column = |m: usize| &y[(first + 3 * m) * NDOF_Y..][..NDOF_Y];
+        if count == 1 {
+            kb.copy_from_slice(column(0));
+        } else {
+            let (c0, c1, c2) = (column(0), column(1), column(2));
+            for r in 0..NDOF_Y {
+                kb[r] = -(c0[r] + c1[r] + c2[r]);
+            }
         }
     }
-    SMatrix::from_fn(|a, b| {
-        let (first, count, sign) = Y_DOFS[a];
-        sign * (0..count).map(|m| ks[(first + 3 * m, b)]).sum::<f64>()
-    })
+    let mut k = SMatrix::<f64, NDOF_EL, NDOF_EL>::zeros();
+    for (b, kb) in ks.iter().enumerate() {
+        for a in 0..NDOF_EL {
+            k[(a, b)] = gather(kb, a);
+        }
+    }
+    k
 }
 
 /// Which nodal field each point vector interpolates: 0 = mid-surface

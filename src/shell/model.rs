@@ -32,7 +32,7 @@
 // Node/dof/component loops read better with explicit indices.
 #![allow(clippy::needless_range_loop)]
 
-use super::element::{ElementMatrix, ShellElement};
+use super::element::{ElementMatrix, FullMapCache, ShellElement};
 use super::geometric_map;
 use super::kinematics::{NDOF_EL, PackedSym, Vec3};
 use super::material::Material;
@@ -45,7 +45,7 @@ use crate::error::{Error, Result};
 use crate::fe::dof::{Dof, PER_NODE, index as dof};
 use crate::fe::pattern::{ElementSlots, NO_SLOT, element_slots, node_block_structure};
 use crate::fe::surface_load;
-use crate::linalg::{SparseMatrix, Structure};
+use crate::linalg::{ColumnBlock, SparseMatrix, Structure};
 use rayon::prelude::*;
 use std::sync::Arc;
 
@@ -655,16 +655,7 @@ impl ShellModel {
         rl: &mut [f64],
     ) {
         // Free rows of each node: (local row, free index).
-        let mut rows = [[(0usize, 0usize); 6]; 4];
-        let mut counts = [0usize; 4];
-        for (a, &n) in e.nodes.iter().enumerate() {
-            for c in 0..6 {
-                if let Some(i) = self.free[dof(n, c)] {
-                    rows[a][counts[a]] = (6 * a + c, i);
-                    counts[a] += 1;
-                }
-            }
-        }
+        let (rows, counts) = self.element_rows(e);
         let (mut idx, mut vals) = ([0usize; 6], [0.0; 6]);
         for b in 0..24 {
             let gb = dof(e.nodes[b / 6], b % 6);
@@ -694,6 +685,68 @@ impl ShellModel {
                 }
             }
         }
+    }
+
+    /// [`Self::scatter_element`] of `elements` restricted to the columns of
+    /// `block`, their slots given; the fixed columns go to `rl` where given
+    /// (to one block only).
+    fn scatter_block(
+        &self,
+        elements: &[ShellElement],
+        slots: &[ElementSlots],
+        kes: &[ElementMatrix],
+        block: ColumnBlock,
+        mut rl: Option<&mut [f64]>,
+    ) {
+        for ((e, slots), ke) in elements.iter().zip(slots).zip(kes) {
+            let (rows, counts) = self.element_rows(e);
+            for (b, column) in slots.iter().enumerate() {
+                let gb = dof(e.nodes[b / 6], b % 6);
+                match self.free[gb] {
+                    Some(j) if block.cols.contains(&j) => {
+                        for (a, &slot) in column.iter().enumerate() {
+                            let run = &rows[a][..counts[a]];
+                            if run.is_empty() {
+                                continue;
+                            }
+                            let at = slot as usize - block.first_slot;
+                            for (v, &(la, _)) in
+                                block.values[at..at + run.len()].iter_mut().zip(run)
+                            {
+                                *v += ke[(la, b)];
+                            }
+                        }
+                    }
+                    Some(_) => {}
+                    None => {
+                        if let Some(rl) = rl.as_deref_mut() {
+                            for a in 0..4 {
+                                for &(la, _) in &rows[a][..counts[a]] {
+                                    let ga = dof(e.nodes[la / 6], la % 6);
+                                    rl[ga] += ke[(la, b)] * self.prescribed[gb];
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    /// Free rows of each node of `e`: (local row, free index), and their
+    /// numbers.
+    fn element_rows(&self, e: &ShellElement) -> ([[(usize, usize); 6]; 4], [usize; 4]) {
+        let mut rows = [[(0usize, 0usize); 6]; 4];
+        let mut counts = [0usize; 4];
+        for (a, &n) in e.nodes.iter().enumerate() {
+            for c in 0..6 {
+                if let Some(i) = self.free[dof(n, c)] {
+                    rows[a][counts[a]] = (6 * a + c, i);
+                    counts[a] += 1;
+                }
+            }
+        }
+        (rows, counts)
     }
 
     /// Order 0 of the step's series at u0: element series (which also give
@@ -957,11 +1010,30 @@ impl ContinuationProblem for ShellModel {
                 .par_iter()
                 .zip(elements.par_iter())
                 .with_min_len(PAR_MIN)
-                .map(|(st, e)| st.tangent(e))
+                .map_init(FullMapCache::default, |cache, (st, e)| st.tangent(e, cache))
                 .collect();
-            for (i, (e, ke)) in elements.iter().zip(&kes).enumerate() {
-                let slots = self.slots.get(chunk * TANGENT_CHUNK + i);
-                self.scatter_element(e, slots, ke, &mut k, &mut rl);
+            let first = chunk * TANGENT_CHUNK;
+            let threads = rayon::current_num_threads();
+            let blocks = (threads > 1 && self.slots.len() == self.elements.len())
+                .then(|| k.column_blocks(threads))
+                .flatten();
+            match blocks {
+                // Each thread adds to its own columns, every element in
+                // order: the same sums as one thread.
+                Some(blocks) => {
+                    let slots = &self.slots[first..first + elements.len()];
+                    let mut rl = Some(&mut rl[..]);
+                    let work: Vec<_> = blocks.into_iter().map(|b| (b, rl.take())).collect();
+                    work.into_par_iter().for_each(|(block, rl)| {
+                        self.scatter_block(elements, slots, &kes, block, rl);
+                    });
+                }
+                None => {
+                    for (i, (e, ke)) in elements.iter().zip(&kes).enumerate() {
+                        let slots = self.slots.get(first + i);
+                        self.scatter_element(e, slots, ke, &mut k, &mut rl);
+                    }
+                }
             }
         }
         let prescribed = &self.prescribed;
@@ -1016,7 +1088,7 @@ impl ContinuationProblem for ShellModel {
                 }
             }
         }
-        if let Some((row, _, _)) = k.entries().find(|t| !t.2.is_finite()) {
+        if let Some((row, _, _)) = k.first_non_finite() {
             let i = self.free.iter().position(|f| *f == Some(row)).unwrap_or(0);
             return Err(Error::NonFinite {
                 step: 0,

@@ -23,10 +23,10 @@
 //! ([`ShellElement::state_geometric`]): M_0 would subtract two nearly equal
 //! Gram matrices.
 
-use super::element::{ElementMatrix, ShellElement};
+use super::element::{ElementMatrix, FullMapCache, ShellElement};
 use super::kinematics::{
-    NCOL, NDOF_EL, NDOF_Y, NodalVectors, PackedSym, SYM_INDEX, SYM_PAIRS, Vec3, YMatrix,
-    element_force, element_matrix, nodal_vectors, pack, unpack,
+    NCOL, NDOF_EL, NDOF_Y, NSYM, NodalVectors, PackedSym, SYM_INDEX, SYM_PAIRS, Vec3, YMatrix,
+    element_force, element_matrix, nodal_vectors, pack,
 };
 use crate::fe::prefetch::prefetch;
 
@@ -199,16 +199,35 @@ impl ElementSeries {
     /// The condensed tangent at the step start, f_1 = K_t q_1: on Y,
     /// δf = δY Kg_0 + Y_0 K(Y_0ᵀδY + δYᵀY_0), the geometric part Kg_0 ⊗ I3
     /// and the material part Y_0 T; then mapped to the element unknowns.
-    pub fn tangent(&self, e: &ShellElement) -> ElementMatrix {
-        let (y0, kg0) = (&self.y[0], unpack(&self.kg[0]));
+    pub fn tangent(&self, e: &ShellElement, cache: &mut FullMapCache) -> ElementMatrix {
+        let (y0, kg0) = (&self.y[0], &self.kg[0]);
+        let jac = e.gram_jacobian(y0, cache);
         let mut k = YMatrix::zeros();
-        for (j, t) in e.gram_jacobian(y0).column_iter().enumerate() {
-            let df = y0 * unpack(&t.into_owned());
-            k.column_mut(j).copy_from_slice(df.as_slice());
+        // Column j: Y_0 times the column's packed matrix, unpacked on the fly
+        // (entry (d, c) is packed at SYM_INDEX[d][c]).
+        for (kc, t) in k
+            .as_mut_slice()
+            .chunks_exact_mut(NDOF_Y)
+            .zip(jac.as_slice().chunks_exact(NSYM))
+        {
+            for (c, out) in kc.chunks_exact_mut(3).enumerate() {
+                let mut acc = [0.0; 3];
+                for d in 0..NCOL {
+                    let v = t[SYM_INDEX[d][c]];
+                    for (i, a) in acc.iter_mut().enumerate() {
+                        *a += y0[(i, d)] * v;
+                    }
+                }
+                out.copy_from_slice(&acc);
+            }
         }
-        for j in 0..NDOF_Y {
-            for i in (j % 3..NDOF_Y).step_by(3) {
-                k[(i, j)] += kg0[(i / 3, j / 3)];
+        // Kg_0 ⊗ I3.
+        for a in 0..NCOL {
+            for b in 0..NCOL {
+                let g = kg0[SYM_INDEX[a][b]];
+                for i in 0..3 {
+                    k[(3 * a + i, 3 * b + i)] += g;
+                }
             }
         }
         element_matrix(&k)
@@ -350,7 +369,7 @@ mod tests {
             SVector::from_fn(|k, _| (0..7).map(|j| vinv[(p, j)] * forces[j][k]).sum())
         };
         let mut st = ElementSeries::start(&e, &xs0, &ds0);
-        let kt = st.tangent(&e);
+        let kt = st.tangent(&e, &mut FullMapCache::default());
         let q = |p: usize| -> SVector<f64, NDOF_EL> {
             if p > 2 {
                 return SVector::zeros();
