@@ -357,13 +357,14 @@ fn row_sum_norm(a: &[f64], nd: usize) -> f64 {
 /// returns A = dv/du (nd × nd, row-major) and d(v, z)/du (n × nd, row-major).
 fn ode_jacobian<P: DaeProblem + ?Sized>(eng: &mut Engine<P>) -> (Vec<f64>, Vec<f64>) {
     let (nd, n) = (eng.nd, eng.n());
-    let cols: Vec<usize> = (0..nd).collect();
-    let tangents = eng.tape.node_tangents(&cols);
+    // The tangents alone: no lists, nothing allocated.
+    eng.tape
+        .update_dense_tangents(&eng.u_cols, &mut eng.u_tangents);
     let mut dvz = vec![0.0; n * nd];
     let mut col = vec![0.0; n];
     for j in 0..nd {
         for (r, c) in col.iter_mut().enumerate() {
-            *c = -eng.tape.jacobian_entry(&tangents, r, j);
+            *c = -eng.tape.jacobian_entry(&eng.u_tangents, r, j);
         }
         if !eng.lu.solve_in_place(&mut col) {
             col.fill(f64::NAN);
