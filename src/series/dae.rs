@@ -578,6 +578,21 @@ fn series_at<P: DaeProblem + ?Sized>(
     index: usize,
     n_ord: usize,
 ) -> Result<Vec<Vec<f64>>> {
+    solve_series(eng, u0, vz0, t0, index, n_ord)?;
+    let mut out = Vec::new();
+    copy_series(eng, &mut out);
+    Ok(out)
+}
+
+/// [`series_at`] left on the tape (its inputs' series), not copied out.
+fn solve_series<P: DaeProblem + ?Sized>(
+    eng: &mut Engine<P>,
+    u0: &[f64],
+    vz0: &[f64],
+    t0: f64,
+    index: usize,
+    n_ord: usize,
+) -> Result<()> {
     let (nd, n) = (eng.nd, eng.n());
     eng.load0(u0, vz0, t0);
     let start = eng.factorize(index, t0, true)?;
@@ -609,9 +624,21 @@ fn series_at<P: DaeProblem + ?Sized>(
         }
     }
     charge(&mut eng.stats.series_s, start);
-    Ok((0..nd + n)
-        .map(|i| eng.tape.input_series(i).to_vec())
-        .collect())
+    Ok(())
+}
+
+/// The inputs' series (u, v, z) on the tape into `out`, reusing its vectors
+/// (an implicit try's iterates: one series each).
+fn copy_series<P: DaeProblem + ?Sized>(eng: &Engine<P>, out: &mut Vec<Vec<f64>>) {
+    let count = eng.nd + eng.n();
+    out.truncate(count);
+    for (i, c) in out.iter_mut().enumerate() {
+        c.clear();
+        c.extend_from_slice(eng.tape.input_series(i));
+    }
+    for i in out.len()..count {
+        out.push(eng.tape.input_series(i).to_vec());
+    }
 }
 
 /// Ratio rule a = (eps |y_1| / |y_N|)^(1/(N-1)) on y = (u, v, z), capped at

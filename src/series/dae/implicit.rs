@@ -77,7 +77,10 @@
 //! the fast amplitude left at t1 (the step-start transient test, applied to
 //! the end).
 
-use super::{DaeConfig, DaeProblem, Engine, Stepping, TimeStep, explicit_step, series_at};
+use super::{
+    DaeConfig, DaeProblem, Engine, Stepping, TimeStep, copy_series, explicit_step, series_at,
+    solve_series,
+};
 // (geometric_distance is reached as super::geometric_distance)
 use crate::error::{Error, Result};
 use crate::linalg::{DenseLu, norm};
@@ -395,13 +398,12 @@ fn attempt<P: DaeProblem + ?Sized>(
 ) -> Result<(Vec<Vec<f64>>, f64)> {
     let nd = eng.nd;
     let t1 = t0 + h;
+    // The weights γ and the powers of h and -h, once per try (each γ is a
+    // product of up to n quotients); the same products as computed in place.
+    let w = Weights::new(m, n, h);
     // Right side of (I2): sum_j γ(m, n, j) u0_j h^j.
     let rhs: Vec<f64> = (0..nd)
-        .map(|i| {
-            (0..=m)
-                .map(|j| gamma(m, n, j) * series0[i][j] * h.powi(j as i32))
-                .sum()
-        })
+        .map(|i| (0..=m).map(|j| w.mn[j] * series0[i][j] * w.h[j]).sum())
         .collect();
     // Predictor: the series at t0 summed up to its smallest term (orders
     // 1..=m, the first local minimum of |u_j| h^j over the differential
@@ -412,20 +414,14 @@ fn attempt<P: DaeProblem + ?Sized>(
     // 1e-4 N: 1,129 steps, accepted with error ratios ~1e-6; 179 with this
     // predictor, README "Stiffness in time").
     // A given guess (y at t0 + h) replaces it.
-    let term = |j: usize| {
-        norm(
-            &(0..nd)
-                .map(|i| series0[i][j] * h.powi(j as i32))
-                .collect::<Vec<_>>(),
-        )
-    };
+    let term = |j: usize| norm(&(0..nd).map(|i| series0[i][j] * w.h[j]).collect::<Vec<_>>());
     let mut order = 1;
     while order < m && term(order + 1) < term(order) {
         order += 1;
     }
     let increment = |c: &[f64]| -> f64 {
         (1..=order.min(c.len() - 1))
-            .map(|j| c[j] * h.powi(j as i32))
+            .map(|j| c[j] * w.h[j])
             .sum::<f64>()
     };
     let mut u1: Vec<f64> = (0..nd).map(|i| u0[i] + increment(&series0[i])).collect();
@@ -442,21 +438,28 @@ fn attempt<P: DaeProblem + ?Sized>(
     let mut a: Vec<f64> = Vec::new();
     let mut lu = DenseLu::default();
     let mut last: Option<(Vec<f64>, Vec<f64>)> = None;
+    // The iterate's series, its G and a scratch vector (reused).
+    let mut s = Vec::new();
+    let mut r = vec![0.0; nd];
+    let mut scratch = vec![0.0; nd];
     for _ in 0..MAX_ITERATIONS {
         eng.newton(&u1, &mut vz1, t1, cfg.newton_tol, index)?;
-        let s = series_at(eng, &u1, &vz1, t1, index, n)?;
+        solve_series(eng, &u1, &vz1, t1, index, n)?;
+        copy_series(eng, &mut s);
         ch.iterations += 1;
         // G(u1) of (I2), and the magnitude of its terms (its round-off floor).
-        let mut r = vec![0.0; nd];
         let mut mag = 0.0f64;
         for i in 0..nd {
-            let terms = (0..=n).map(|j| gamma(n, m, j) * s[i][j] * (-h).powi(j as i32));
+            let terms = (0..=n).map(|j| w.nm[j] * s[i][j] * w.minus_h[j]);
             r[i] = terms.clone().sum::<f64>() - rhs[i];
             mag = mag.max(terms.map(f64::abs).sum::<f64>());
         }
         // Scale of the local error: the first-order increment, or |u1|
         // itself when u barely moves (a relative tolerance per step).
-        let first = norm(&(0..nd).map(|i| s[i][1]).collect::<Vec<_>>());
+        for (x, c) in scratch.iter_mut().zip(&s) {
+            *x = c[1];
+        }
+        let first = norm(&scratch);
         let scale = (first * h).max(norm(&u1));
         let tol = (0.1 * cfg.eps * scale).max(16.0 * f64::EPSILON * mag);
         // The last update moved u1 by round-off only: G is at its floor
@@ -477,10 +480,10 @@ fn attempt<P: DaeProblem + ?Sized>(
             let mut g = vec![0.0; nd];
             for i in 0..nd {
                 g[i] = (0..=n)
-                    .map(|j| gamma(n, m - 1, j) * s[i][j] * (-h).powi(j as i32))
+                    .map(|j| w.nm1[j] * s[i][j] * w.minus_h[j])
                     .sum::<f64>()
                     - (0..m)
-                        .map(|j| gamma(m - 1, n, j) * series0[i][j] * h.powi(j as i32))
+                        .map(|j| w.m1n[j] * series0[i][j] * w.h[j])
                         .sum::<f64>();
             }
             let mp = two_point_matrix(&a, nd, h, n, m - 1);
@@ -518,12 +521,8 @@ fn attempt<P: DaeProblem + ?Sized>(
                 if !(fast <= 0.1 * cfg.eps * scale_k) {
                     continue;
                 }
-                let defect = (0..=n)
-                    .map(|j| gamma(n, m - 1, j) * y[j] * (-h).powi(j as i32))
-                    .sum::<f64>()
-                    - (0..m)
-                        .map(|j| gamma(m - 1, n, j) * y0[j] * h.powi(j as i32))
-                        .sum::<f64>();
+                let defect = (0..=n).map(|j| w.nm1[j] * y[j] * w.minus_h[j]).sum::<f64>()
+                    - (0..m).map(|j| w.m1n[j] * y0[j] * w.h[j]).sum::<f64>();
                 ratio = ratio.max(defect.abs() / (cfg.eps * scale_k + f64::MIN_POSITIVE));
             }
             return Ok((s, ratio));
@@ -531,7 +530,7 @@ fn attempt<P: DaeProblem + ?Sized>(
         if !r.iter().all(|x| x.is_finite()) {
             break;
         }
-        if let Some((du, r_old)) = &last {
+        if let Some((du, r_old)) = &mut last {
             // Broyden: M += (ΔG - M Δu) Δuᵀ / (Δuᵀ Δu).
             let dd: f64 = du.iter().map(|x| x * x).sum();
             if dd > 0.0 {
@@ -545,8 +544,12 @@ fn attempt<P: DaeProblem + ?Sized>(
             }
         }
         lu.factorize(nd, |i, j| mat[i * nd + j]);
-        let mut du: Vec<f64> = r.iter().map(|x| -x).collect();
-        if !lu.solve_in_place(&mut du) || !du.iter().all(|x| x.is_finite()) {
+        // Δu and G of this iterate into the previous one's vectors.
+        let (du, r_old) = last.get_or_insert_with(|| (vec![0.0; nd], vec![0.0; nd]));
+        for (d, x) in du.iter_mut().zip(&r) {
+            *d = -x;
+        }
+        if !lu.solve_in_place(du) || !du.iter().all(|x| x.is_finite()) {
             break;
         }
         for i in 0..nd {
@@ -556,7 +559,7 @@ fn attempt<P: DaeProblem + ?Sized>(
         for (k, x) in vz1.iter_mut().enumerate() {
             *x += (0..nd).map(|j| dvz[k * nd + j] * du[j]).sum::<f64>();
         }
-        last = Some((du, r));
+        r_old.copy_from_slice(&r);
     }
     Err(Error::NoConvergence {
         step: index,
@@ -615,6 +618,32 @@ fn two_point_matrix(a: &[f64], nd: usize, h: f64, n: usize, m: usize) -> Vec<f64
         mat = next;
     }
     mat
+}
+
+/// The weights γ of (I2) [m/n] and of its error estimate [m-1/n], and the
+/// powers h^j and (-h)^j, j = 0..=max(m, n).
+struct Weights {
+    mn: Vec<f64>,
+    nm: Vec<f64>,
+    m1n: Vec<f64>,
+    nm1: Vec<f64>,
+    h: Vec<f64>,
+    minus_h: Vec<f64>,
+}
+
+impl Weights {
+    fn new(m: usize, n: usize, h: f64) -> Self {
+        let top = m.max(n);
+        let table = |f: &dyn Fn(usize) -> f64| (0..=top).map(f).collect::<Vec<_>>();
+        Self {
+            mn: table(&|j| gamma(m, n, j)),
+            nm: table(&|j| gamma(n, m, j)),
+            m1n: table(&|j| gamma(m.saturating_sub(1), n, j)),
+            nm1: table(&|j| gamma(n, m.saturating_sub(1), j)),
+            h: table(&|j| h.powi(j as i32)),
+            minus_h: table(&|j| (-h).powi(j as i32)),
+        }
+    }
 }
 
 /// C(i, j) (0 when j > i).
