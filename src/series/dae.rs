@@ -612,8 +612,9 @@ fn solve_series<P: DaeProblem + ?Sized>(
         // Store the solved coefficients in every node: an exact linear
         // update instead of a second propagation of order p.
         eng.tape.add_to_order(p, &eng.tangents, &eng.rhs);
-        let defect = eng.output_norm(p);
-        if !defect.is_finite() || eng.rhs.iter().any(|v| !v.is_finite()) {
+        // The defect's square: finite exactly when |F_p| is (no root needed).
+        let defect2: f64 = (0..n).map(|j| eng.tape.output(j, p)).map(|x| x * x).sum();
+        if !defect2.is_finite() || eng.rhs.iter().any(|v| !v.is_finite()) {
             charge(&mut eng.stats.series_s, start);
             return Err(Error::NonFinite {
                 step: index,

@@ -606,8 +606,13 @@ fn hermite_data(y0: &[Vec<f64>], y1: &[Vec<f64>], h: f64, k0: usize, k1: usize) 
 /// (nd × nd, row-major), by Horner.
 fn two_point_matrix(a: &[f64], nd: usize, h: f64, n: usize, m: usize) -> Vec<f64> {
     let mut mat = identity(nd);
+    // Horner's partial products alternate between two matrices.
+    let mut next = identity(nd);
     for p in (1..=n).rev() {
-        let mut next = identity(nd);
+        next.fill(0.0);
+        for i in 0..nd {
+            next[i * nd + i] = 1.0;
+        }
         let c = -h * gamma(n, m, p) / gamma(n, m, p - 1);
         for i in 0..nd {
             for j in 0..nd {
@@ -615,7 +620,7 @@ fn two_point_matrix(a: &[f64], nd: usize, h: f64, n: usize, m: usize) -> Vec<f64
                 next[i * nd + j] += c * acc;
             }
         }
-        mat = next;
+        std::mem::swap(&mut mat, &mut next);
     }
     mat
 }
