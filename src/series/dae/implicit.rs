@@ -124,9 +124,40 @@ pub(super) struct Chooser {
     pub output_points: usize,
     pub accepted: usize,
     pub rejected: usize,
+    /// The weights γ of the run's (m, n), and the LU of the Hermite
+    /// interpolation matrix per (k0, k1): the same for every step.
+    gammas: Option<Gammas>,
+    hermite: Vec<((usize, usize), DenseLu)>,
 }
 
 impl Chooser {
+    /// The weights γ of (I2) [m/n] and of its error estimate (cached).
+    fn gammas(&mut self, m: usize, n: usize) -> &Gammas {
+        if self.gammas.as_ref().is_none_or(|g| (g.m, g.n) != (m, n)) {
+            self.gammas = Some(Gammas::new(m, n));
+        }
+        self.gammas.as_ref().expect("set above")
+    }
+
+    /// [`hermite_data`] with the matrix's LU cached per (k0, k1).
+    fn hermite_data(
+        &mut self,
+        y0: &[Vec<f64>],
+        y1: &[Vec<f64>],
+        h: f64,
+        k0: usize,
+        k1: usize,
+    ) -> Vec<Vec<f64>> {
+        let at = match self.hermite.iter().position(|(k, _)| *k == (k0, k1)) {
+            Some(at) => at,
+            None => {
+                self.hermite.push(((k0, k1), hermite_matrix(k0, k1)));
+                self.hermite.len() - 1
+            }
+        };
+        hermite_solve(&self.hermite[at].1, y0, y1, h, k0, k1)
+    }
+
     /// Explicit steps for 8, 16, 32 ... steps after an implicit try that
     /// did not pay; the next try starts again from the explicit length.
     fn back_off(&mut self) {
@@ -223,7 +254,7 @@ pub(super) fn step<P: DaeProblem + ?Sized>(
                     // orders 0..k at both ends, k = 1 in a stiff step (the
                     // higher orders at t0 carry the fast mode times (h|A|)^k).
                     let k = if h * fast > 1.0 { 1 } else { m.min(n) };
-                    let dense = hermite_data(&series0, &series, h, k, k);
+                    let dense = ch.hermite_data(&series0, &series, h, k, k);
                     // The starting guess of the output times' iterations:
                     // orders 0..3 at both ends. Its fast content, about
                     // d (h |A|)^3 / 3! with d the ends' fast amplitude,
@@ -232,7 +263,7 @@ pub(super) fn step<P: DaeProblem + ?Sized>(
                     // h |A| up to 4e4), and only the solved points are
                     // output. Quasi-Newton iterations of the run from orders
                     // 1 / 2 / 3 / 4: 968 / 844 / 734 / 738.
-                    let start = hermite_data(&series0, &series, h, GUESS.min(m), GUESS.min(n));
+                    let start = ch.hermite_data(&series0, &series, h, GUESS.min(m), GUESS.min(n));
                     // Output times inside: solved by (I2) over t0 -> t.
                     let mut points = Vec::new();
                     let before = ch.iterations;
@@ -398,12 +429,13 @@ fn attempt<P: DaeProblem + ?Sized>(
 ) -> Result<(Vec<Vec<f64>>, f64)> {
     let nd = eng.nd;
     let t1 = t0 + h;
-    // The weights γ and the powers of h and -h, once per try (each γ is a
-    // product of up to n quotients); the same products as computed in place.
-    let w = Weights::new(m, n, h);
+    // The weights γ (once per run) and the powers of h and -h (once per
+    // try): the same values as computed in place.
+    let gw = *ch.gammas(m, n);
+    let w = Powers::new(m.max(n), h);
     // Right side of (I2): sum_j γ(m, n, j) u0_j h^j.
     let rhs: Vec<f64> = (0..nd)
-        .map(|i| (0..=m).map(|j| w.mn[j] * series0[i][j] * w.h[j]).sum())
+        .map(|i| (0..=m).map(|j| gw.mn[j] * series0[i][j] * w.h[j]).sum())
         .collect();
     // Predictor: the series at t0 summed up to its smallest term (orders
     // 1..=m, the first local minimum of |u_j| h^j over the differential
@@ -450,7 +482,7 @@ fn attempt<P: DaeProblem + ?Sized>(
         // G(u1) of (I2), and the magnitude of its terms (its round-off floor).
         let mut mag = 0.0f64;
         for i in 0..nd {
-            let terms = (0..=n).map(|j| w.nm[j] * s[i][j] * w.minus_h[j]);
+            let terms = (0..=n).map(|j| gw.nm[j] * s[i][j] * w.minus_h[j]);
             r[i] = terms.clone().sum::<f64>() - rhs[i];
             mag = mag.max(terms.map(f64::abs).sum::<f64>());
         }
@@ -480,10 +512,10 @@ fn attempt<P: DaeProblem + ?Sized>(
             let mut g = vec![0.0; nd];
             for i in 0..nd {
                 g[i] = (0..=n)
-                    .map(|j| w.nm1[j] * s[i][j] * w.minus_h[j])
+                    .map(|j| gw.nm1[j] * s[i][j] * w.minus_h[j])
                     .sum::<f64>()
                     - (0..m)
-                        .map(|j| w.m1n[j] * series0[i][j] * w.h[j])
+                        .map(|j| gw.m1n[j] * series0[i][j] * w.h[j])
                         .sum::<f64>();
             }
             let mp = two_point_matrix(&a, nd, h, n, m - 1);
@@ -521,8 +553,10 @@ fn attempt<P: DaeProblem + ?Sized>(
                 if !(fast <= 0.1 * cfg.eps * scale_k) {
                     continue;
                 }
-                let defect = (0..=n).map(|j| w.nm1[j] * y[j] * w.minus_h[j]).sum::<f64>()
-                    - (0..m).map(|j| w.m1n[j] * y0[j] * w.h[j]).sum::<f64>();
+                let defect = (0..=n)
+                    .map(|j| gw.nm1[j] * y[j] * w.minus_h[j])
+                    .sum::<f64>()
+                    - (0..m).map(|j| gw.m1n[j] * y0[j] * w.h[j]).sum::<f64>();
                 ratio = ratio.max(defect.abs() / (cfg.eps * scale_k + f64::MIN_POSITIVE));
             }
             return Ok((s, ratio));
@@ -577,24 +611,41 @@ fn attempt<P: DaeProblem + ?Sized>(
 /// coefficients in s). Inside a stiff step the high orders carry the fast
 /// mode's amplitude times (h |A|)^k: the caller takes k = 1 there. Used
 /// between the output times, which (I2) solves for itself.
+#[cfg(test)]
 fn hermite_data(y0: &[Vec<f64>], y1: &[Vec<f64>], h: f64, k0: usize, k1: usize) -> Vec<Vec<f64>> {
-    let size = k0 + k1 + 2;
-    // Rows 0..=k0: P^(j)(0)/j! = c_j; the next k1 + 1 rows:
-    // P^(j)(1)/j! = sum_i C(i, j) c_i.
+    hermite_solve(&hermite_matrix(k0, k1), y0, y1, h, k0, k1)
+}
+
+/// The LU of the matrix of [`hermite_data`]: rows 0..=k0: P^(j)(0)/j! =
+/// c_j; the next k1 + 1 rows: P^(j)(1)/j! = sum_i C(i, j) c_i.
+fn hermite_matrix(k0: usize, k1: usize) -> DenseLu {
     let mut lu = DenseLu::default();
-    lu.factorize(size, |r, c| {
+    lu.factorize(k0 + k1 + 2, |r, c| {
         if r <= k0 {
             f64::from(u8::from(r == c))
         } else {
             binomial(c, r - k0 - 1)
         }
     });
+    lu
+}
+
+/// [`hermite_data`] with the matrix's LU given.
+fn hermite_solve(
+    lu: &DenseLu,
+    y0: &[Vec<f64>],
+    y1: &[Vec<f64>],
+    h: f64,
+    k0: usize,
+    k1: usize,
+) -> Vec<Vec<f64>> {
+    let powers: Vec<f64> = (0..=k0.max(k1)).map(|j| h.powi(j as i32)).collect();
     y0.iter()
         .zip(y1)
         .map(|(a, b)| {
             let mut rhs: Vec<f64> = (0..=k0)
-                .map(|j| a[j] * h.powi(j as i32))
-                .chain((0..=k1).map(|j| b[j] * h.powi(j as i32)))
+                .map(|j| a[j] * powers[j])
+                .chain((0..=k1).map(|j| b[j] * powers[j]))
                 .collect();
             lu.solve_in_place(&mut rhs);
             rhs
@@ -625,28 +676,44 @@ fn two_point_matrix(a: &[f64], nd: usize, h: f64, n: usize, m: usize) -> Vec<f64
     mat
 }
 
-/// The weights γ of (I2) [m/n] and of its error estimate [m-1/n], and the
-/// powers h^j and (-h)^j, j = 0..=max(m, n).
-struct Weights {
-    mn: Vec<f64>,
-    nm: Vec<f64>,
-    m1n: Vec<f64>,
-    nm1: Vec<f64>,
+/// The weights γ of (I2) [m/n] and of its error estimate [m-1/n],
+/// j = 0..=max(m, n) (each γ is a product of up to n quotients; m, n are at
+/// most HO_M, HO_N).
+#[derive(Clone, Copy, Debug)]
+struct Gammas {
+    m: usize,
+    n: usize,
+    mn: [f64; HO_N + 1],
+    nm: [f64; HO_N + 1],
+    m1n: [f64; HO_N + 1],
+    nm1: [f64; HO_N + 1],
+}
+
+impl Gammas {
+    fn new(m: usize, n: usize) -> Self {
+        let table = |a: usize, b: usize| std::array::from_fn(|j| gamma(a, b, j));
+        Self {
+            m,
+            n,
+            mn: table(m, n),
+            nm: table(n, m),
+            m1n: table(m.saturating_sub(1), n),
+            nm1: table(n, m.saturating_sub(1)),
+        }
+    }
+}
+
+/// h^j and (-h)^j, j = 0..=max(m, n).
+struct Powers {
     h: Vec<f64>,
     minus_h: Vec<f64>,
 }
 
-impl Weights {
-    fn new(m: usize, n: usize, h: f64) -> Self {
-        let top = m.max(n);
-        let table = |f: &dyn Fn(usize) -> f64| (0..=top).map(f).collect::<Vec<_>>();
+impl Powers {
+    fn new(top: usize, h: f64) -> Self {
         Self {
-            mn: table(&|j| gamma(m, n, j)),
-            nm: table(&|j| gamma(n, m, j)),
-            m1n: table(&|j| gamma(m.saturating_sub(1), n, j)),
-            nm1: table(&|j| gamma(n, m.saturating_sub(1), j)),
-            h: table(&|j| h.powi(j as i32)),
-            minus_h: table(&|j| (-h).powi(j as i32)),
+            h: (0..=top).map(|j| h.powi(j as i32)).collect(),
+            minus_h: (0..=top).map(|j| (-h).powi(j as i32)).collect(),
         }
     }
 }
