@@ -128,9 +128,26 @@ pub(super) struct Chooser {
     /// interpolation matrix per (k0, k1): the same for every step.
     gammas: Option<Gammas>,
     hermite: Vec<((usize, usize), DenseLu)>,
+    /// ln N! = sum_{k=2}^{N} ln k at index N, summed in that order (cached:
+    /// a logarithm per order and step otherwise).
+    ln_fact: Vec<f64>,
 }
 
 impl Chooser {
+    /// ln n! as [`fast_amplitude`] sums it.
+    fn ln_factorial(&mut self, n: usize) -> f64 {
+        if self.ln_fact.is_empty() {
+            // The empty sums (n = 0, 1) as `Iterator::sum` gives them.
+            self.ln_fact = vec![std::iter::empty::<f64>().sum(); 2];
+        }
+        while self.ln_fact.len() <= n {
+            let k = self.ln_fact.len();
+            let last = self.ln_fact[k - 1];
+            self.ln_fact.push(last + (k as f64).ln());
+        }
+        self.ln_fact[n]
+    }
+
     /// The weights γ of (I2) [m/n] and of its error estimate (cached).
     fn gammas(&mut self, m: usize, n: usize) -> &Gammas {
         if self.gammas.as_ref().is_none_or(|g| (g.m, g.n) != (m, n)) {
@@ -210,7 +227,7 @@ pub(super) fn step<P: DaeProblem + ?Sized>(
     let singular = super::geometric_distance(eng, &series0, n_ord).is_some();
     // A fast transient not yet decayed: the explicit steps resolve it (an
     // L-stable step would damp it at once, right at its end but not inside).
-    let d0 = fast_amplitude(&series0, eng.nd, n_ord, fast);
+    let d0 = fast_amplitude(&series0, eng.nd, n_ord, fast, ch.ln_factorial(n_ord));
     let scale0 =
         norm(u0).max(norm(&(0..eng.nd).map(|i| series0[i][1]).collect::<Vec<_>>()) * a_exp);
     let transient = d0 > cfg.eps * scale0;
@@ -364,13 +381,13 @@ pub(super) fn step<P: DaeProblem + ?Sized>(
 /// Amplitude d of a fast mode e^(λ t) (|λ| = `fast`) that would explain the
 /// last term of the differential unknowns: |u_N| = d |λ|^N / N!, i.e.
 /// d = |u_N| N! / |λ|^N (in logarithms: |λ|^N overflows). An upper bound
-/// of the fast amplitude when the last term is fast-dominated.
-fn fast_amplitude(series: &[Vec<f64>], nd: usize, n_ord: usize, fast: f64) -> f64 {
+/// of the fast amplitude when the last term is fast-dominated. `ln_fact`:
+/// ln N! ([`Chooser::ln_factorial`]).
+fn fast_amplitude(series: &[Vec<f64>], nd: usize, n_ord: usize, fast: f64, ln_fact: f64) -> f64 {
     let last = norm(&(0..nd).map(|i| series[i][n_ord]).collect::<Vec<_>>());
     if last == 0.0 || fast == 0.0 {
         return 0.0;
     }
-    let ln_fact: f64 = (2..=n_ord).map(|k| (k as f64).ln()).sum();
     (last.ln() + ln_fact - n_ord as f64 * fast.ln()).exp()
 }
 
@@ -536,7 +553,7 @@ fn attempt<P: DaeProblem + ?Sized>(
             // off-manifold iterate (ζ = 1e-6 N on friction-plane: end
             // amplitude 2.5e-11 against 1e-26 on accepted steps, v_x 150
             // times the slow velocity, a wrong Hermite interpolant inside).
-            let d1 = fast_amplitude(&s, nd, n, row_sum_norm(&a, nd));
+            let d1 = fast_amplitude(&s, nd, n, row_sum_norm(&a, nd), ch.ln_factorial(n));
             ratio = ratio.max(d1 / (cfg.eps * scale + f64::MIN_POSITIVE));
             // The algebraic unknowns (and velocities) that the fast mode does
             // not reach: the same formula defect on their own series, so that
