@@ -413,8 +413,8 @@ impl<P: DaeProblem + ?Sized> Engine<'_, P> {
             self.base.clear();
             self.base.extend_from_slice(vz);
             loop {
-                for i in 0..vz.len() {
-                    vz[i] = self.base[i] + damping * self.dx[i];
+                for ((x, b), d) in vz.iter_mut().zip(&self.base).zip(&self.dx) {
+                    *x = b + damping * d;
                 }
                 let r = self.residual0(u, vz, t);
                 self.stats.residual_evaluations += 1;
