@@ -258,8 +258,8 @@ struct Engine<'p, P: DaeProblem + ?Sized> {
     /// point, for A = dv/du (reused).
     u_cols: Vec<usize>,
     u_tangents: Tangents,
-    /// Newton's residual, correction and base point (reused: a Newton
-    /// iterate is a few hundred nanoseconds, an allocation a tenth of that).
+    /// Newton's residual, correction and base point (reused: allocated once
+    /// per run instead of per iterate).
     f: Vec<f64>,
     dx: Vec<f64>,
     base: Vec<f64>,

@@ -66,7 +66,8 @@ impl Tape {
 
     /// The tangents alone, without the per-column lists of
     /// [`Tape::add_to_order`]: enough for a Jacobian (a Newton iterate), and
-    /// the lists cost as much as the pass.
+    /// building the lists costs about as much as the pass (callgrind, friction
+    /// grid: 48.7 M against 51.5 M instructions over 31,401 calls).
     pub fn update_dense_tangents(&self, cols: &[usize], t: &mut Tangents) {
         let k = cols.len();
         t.lists = false;
