@@ -254,6 +254,15 @@ struct Engine<'p, P: DaeProblem + ?Sized> {
     loaded: Vec<f64>,
     /// The last four terms of (u, v, z), for the geometric-series test (reused).
     tail: Vec<Vec<f64>>,
+    /// Tape input indices of u, and d node / du at the step's order-0
+    /// point, for A = dv/du (reused).
+    u_cols: Vec<usize>,
+    u_tangents: Tangents,
+    /// Newton's residual, correction and base point (reused: allocated once
+    /// per run instead of per iterate).
+    f: Vec<f64>,
+    dx: Vec<f64>,
+    base: Vec<f64>,
 }
 
 impl<P: DaeProblem + ?Sized> Engine<'_, P> {
@@ -296,19 +305,38 @@ impl<P: DaeProblem + ?Sized> Engine<'_, P> {
         (0..self.n()).map(|j| self.tape.output(j, 0)).collect()
     }
 
+    /// Sets the order-0 inputs and propagates; F into `self.f`, returns |F|.
+    fn residual0(&mut self, u: &[f64], vz: &[f64], t: f64) -> f64 {
+        self.load0(u, vz, t);
+        self.f.clear();
+        self.f
+            .extend((0..self.nd + self.na).map(|j| self.tape.output(j, 0)));
+        norm(&self.f)
+    }
+
     /// J = dF/d(v, z) at the current order-0 point, LU-factorized into
-    /// `self.lu` (dense: the systems have a handful of unknowns).
-    fn factorize(&mut self, step: usize, t: f64) -> Result<()> {
+    /// `self.lu` (dense: the systems have a handful of unknowns). `lists`:
+    /// also the tangents' lists that the series' orders need
+    /// ([`Tape::add_to_order`]); a Newton iterate needs J alone. Returns
+    /// the clock's reading at the end, for the caller's next phase (a clock
+    /// read costs as much as a 4x4 solve).
+    fn factorize(&mut self, step: usize, t: f64, lists: bool) -> Result<Instant> {
         let start = Instant::now();
-        self.tape.update_tangents(&self.vz_cols, &mut self.tangents);
-        charge(&mut self.stats.assembly_s, start);
-        let start = Instant::now();
+        if lists {
+            self.tape.update_tangents(&self.vz_cols, &mut self.tangents);
+        } else {
+            self.tape
+                .update_dense_tangents(&self.vz_cols, &mut self.tangents);
+        }
+        let assembled = Instant::now();
+        self.stats.assembly_s += (assembled - start).as_secs_f64();
         let n = self.n();
         let (tape, tangents) = (&self.tape, &self.tangents);
         self.lu
             .factorize(n, |r, c| tape.jacobian_entry(tangents, r, c));
         self.stats.factorizations += 1;
-        charge(&mut self.stats.factorization_s, start);
+        let factorized = Instant::now();
+        self.stats.factorization_s += (factorized - assembled).as_secs_f64();
         // Reciprocal condition estimate from the LU pivots, to name the trouble.
         let (mut dmin, mut dmax, mut worst) = (f64::INFINITY, 0.0f64, 0);
         for i in 0..n {
@@ -330,19 +358,18 @@ impl<P: DaeProblem + ?Sized> Engine<'_, P> {
                 ),
             });
         }
-        Ok(())
+        Ok(factorized)
     }
 
-    /// x = -J^-1 r.
-    fn solve(&mut self, r: &[f64]) -> Vec<f64> {
-        let start = Instant::now();
-        let mut x: Vec<f64> = r.iter().map(|x| -x).collect();
-        if !self.lu.solve_in_place(&mut x) {
-            x.fill(f64::NAN);
+    /// `self.dx` = -J^-1 `self.f`, timed from `start`.
+    fn solve_newton(&mut self, start: Instant) {
+        self.dx.clear();
+        self.dx.extend(self.f.iter().map(|x| -x));
+        if !self.lu.solve_in_place(&mut self.dx) {
+            self.dx.fill(f64::NAN);
         }
         self.stats.solves += 1;
         charge(&mut self.stats.solve_s, start);
-        x
     }
 
     /// `rhs` <- -J^-1 (coefficient p of F), in place; untimed (the order loop
@@ -359,9 +386,8 @@ impl<P: DaeProblem + ?Sized> Engine<'_, P> {
 
     /// Damped Newton on F(u, ., t) = 0 for (v, z), from `vz`.
     fn newton(&mut self, u: &[f64], vz: &mut [f64], t: f64, tol: f64, step: usize) -> Result<f64> {
-        let mut f = self.eval0(u, vz, t);
+        let mut res = self.residual0(u, vz, t);
         self.stats.residual_evaluations += 1;
-        let mut res = norm(&f);
         let mut it = 0;
         while res > tol {
             if it >= 100 {
@@ -374,24 +400,24 @@ impl<P: DaeProblem + ?Sized> Engine<'_, P> {
                     tolerance: tol,
                 });
             }
-            self.factorize(step, t)?;
-            let dx = self.solve(&f);
+            let factorized = self.factorize(step, t, false)?;
+            self.solve_newton(factorized);
             // Converged to roundoff: the Newton step no longer changes the
             // unknowns (a steep law can keep |F| above an absolute tolerance).
-            if norm(&dx) <= 1e-14 * (norm(vz) + f64::MIN_POSITIVE) && res <= 1e3 * tol {
+            if norm(&self.dx) <= 1e-14 * (norm(vz) + f64::MIN_POSITIVE) && res <= 1e3 * tol {
                 break;
             }
             // Backtracking on |F|: the friction law is nearly flat away from
             // zero slip, so full Newton steps overshoot.
             let mut damping = 1.0;
-            let base = vz.to_vec();
+            self.base.clear();
+            self.base.extend_from_slice(vz);
             loop {
-                for i in 0..vz.len() {
-                    vz[i] = base[i] + damping * dx[i];
+                for ((x, b), d) in vz.iter_mut().zip(&self.base).zip(&self.dx) {
+                    *x = b + damping * d;
                 }
-                f = self.eval0(u, vz, t);
+                let r = self.residual0(u, vz, t);
                 self.stats.residual_evaluations += 1;
-                let r = norm(&f);
                 if r.is_finite() && (r < res || damping < 1e-10) {
                     res = r;
                     break;
@@ -446,6 +472,11 @@ fn run_with<P: DaeProblem + ?Sized>(
         rhs: vec![0.0; nd + na],
         loaded: Vec::new(),
         tail: vec![vec![0.0; 2 * nd + na]; 4],
+        u_cols: (0..nd).collect(),
+        u_tangents: Tangents::default(),
+        f: Vec::new(),
+        dx: Vec::new(),
+        base: Vec::new(),
     };
     let finish = |stats: Stats, stop: &str, t: f64, error: Option<Error>, r0: f64| DaeResult {
         stats,
@@ -547,10 +578,24 @@ fn series_at<P: DaeProblem + ?Sized>(
     index: usize,
     n_ord: usize,
 ) -> Result<Vec<Vec<f64>>> {
+    solve_series(eng, u0, vz0, t0, index, n_ord)?;
+    let mut out = Vec::new();
+    copy_series(eng, &mut out);
+    Ok(out)
+}
+
+/// [`series_at`] left on the tape (its inputs' series), not copied out.
+fn solve_series<P: DaeProblem + ?Sized>(
+    eng: &mut Engine<P>,
+    u0: &[f64],
+    vz0: &[f64],
+    t0: f64,
+    index: usize,
+    n_ord: usize,
+) -> Result<()> {
     let (nd, n) = (eng.nd, eng.n());
     eng.load0(u0, vz0, t0);
-    eng.factorize(index, t0)?;
-    let start = Instant::now();
+    let start = eng.factorize(index, t0, true)?;
     for p in 1..=n_ord {
         for i in 0..nd {
             let vprev = eng.tape.input_series(nd + i)[p - 1];
@@ -567,8 +612,9 @@ fn series_at<P: DaeProblem + ?Sized>(
         // Store the solved coefficients in every node: an exact linear
         // update instead of a second propagation of order p.
         eng.tape.add_to_order(p, &eng.tangents, &eng.rhs);
-        let defect = eng.output_norm(p);
-        if !defect.is_finite() || eng.rhs.iter().any(|v| !v.is_finite()) {
+        // The defect's square: finite exactly when |F_p| is (no root needed).
+        let defect2: f64 = (0..n).map(|j| eng.tape.output(j, p)).map(|x| x * x).sum();
+        if !defect2.is_finite() || eng.rhs.iter().any(|v| !v.is_finite()) {
             charge(&mut eng.stats.series_s, start);
             return Err(Error::NonFinite {
                 step: index,
@@ -579,9 +625,21 @@ fn series_at<P: DaeProblem + ?Sized>(
         }
     }
     charge(&mut eng.stats.series_s, start);
-    Ok((0..nd + n)
-        .map(|i| eng.tape.input_series(i).to_vec())
-        .collect())
+    Ok(())
+}
+
+/// The inputs' series (u, v, z) on the tape into `out`, reusing its vectors
+/// (an implicit try's iterates: one series each).
+fn copy_series<P: DaeProblem + ?Sized>(eng: &Engine<P>, out: &mut Vec<Vec<f64>>) {
+    let count = eng.nd + eng.n();
+    out.truncate(count);
+    for (i, c) in out.iter_mut().enumerate() {
+        c.clear();
+        c.extend_from_slice(eng.tape.input_series(i));
+    }
+    for i in out.len()..count {
+        out.push(eng.tape.input_series(i).to_vec());
+    }
 }
 
 /// Ratio rule a = (eps |y_1| / |y_N|)^(1/(N-1)) on y = (u, v, z), capped at

@@ -86,6 +86,8 @@ impl TapeBuilder {
         Tape {
             coeffs: vec![0.0; ops.len() * stride],
             read_later: tangents::read_later(&ops, &inputs, &outputs),
+            code: compile(&ops, stride, true),
+            code_high: compile(&ops, stride, false),
             ops,
             inputs,
             outputs,
@@ -199,6 +201,41 @@ pub struct Tape {
     /// Nodes whose coefficient p is read after order p is propagated (see
     /// [`Tape::add_to_order`]).
     read_later: Vec<bool>,
+    /// What [`Tape::propagate`] runs at order 0 and at orders >= 1
+    /// ([`compile`]).
+    code: Vec<(Op, usize)>,
+    code_high: Vec<(Op, usize)>,
+}
+
+/// The operations that compute a coefficient, each with its arguments and
+/// its own node given as offsets into the storage (node * stride): no
+/// index product per operand, and no dispatch for the nodes with nothing
+/// to compute (inputs; constants past order 0, whose coefficients stay 0).
+/// A sine's entry also computes the cosine after it.
+fn compile(ops: &[Op], stride: usize, order0: bool) -> Vec<(Op, usize)> {
+    let o = |a: usize| a * stride;
+    ops.iter()
+        .enumerate()
+        .filter_map(|(i, op)| {
+            let op = match *op {
+                Op::Input | Op::CosOfPrevious => return None,
+                Op::Const(_) if !order0 => return None,
+                Op::Const(k) => Op::Const(k),
+                Op::Add(a, b) => Op::Add(o(a), o(b)),
+                Op::Sub(a, b) => Op::Sub(o(a), o(b)),
+                Op::Mul(a, b) => Op::Mul(o(a), o(b)),
+                Op::Div(a, b) => Op::Div(o(a), o(b)),
+                Op::Neg(a) => Op::Neg(o(a)),
+                Op::Scale(a, k) => Op::Scale(o(a), k),
+                Op::Offset(a, k) => Op::Offset(o(a), k),
+                Op::Sqrt(a) => Op::Sqrt(o(a)),
+                Op::Powf(a, alpha) => Op::Powf(o(a), alpha),
+                Op::Exp(a) => Op::Exp(o(a)),
+                Op::Sin(a) => Op::Sin(o(a)),
+            };
+            Some((op, o(i)))
+        })
+        .collect()
 }
 
 impl Tape {
@@ -240,54 +277,44 @@ impl Tape {
     /// Computes coefficient `p` of every node from the input coefficients
     /// `0..=p` and the node coefficients `0..p` already stored.
     pub fn propagate(&mut self, p: usize) {
+        assert!(
+            p < self.stride,
+            "order {p} beyond the tape's {}",
+            self.stride - 1
+        );
         let s = self.stride;
+        let code = if p == 0 { &self.code } else { &self.code_high };
         let c = &mut self.coeffs;
-        // Coefficients 0..=p of node j: every recurrence reads its arguments
-        // (and its own lower coefficients) before the new value is stored.
-        fn upto(c: &[f64], j: usize, s: usize, p: usize) -> &[f64] {
-            &c[j * s..j * s + p + 1]
+        // Coefficients 0..=p of the node at offset o: every recurrence reads
+        // its arguments (and its own lower coefficients) before the new
+        // value is stored.
+        fn upto(c: &[f64], o: usize, p: usize) -> &[f64] {
+            &c[o..o + p + 1]
         }
-        let mut i = 0;
-        while i < self.ops.len() {
-            let value = match self.ops[i] {
-                Op::Input => {
-                    i += 1;
-                    continue;
-                }
-                Op::Const(k) => {
-                    if p == 0 {
-                        k
-                    } else {
-                        0.0
-                    }
-                }
-                Op::Add(a, b) => c[a * s + p] + c[b * s + p],
-                Op::Sub(a, b) => c[a * s + p] - c[b * s + p],
-                Op::Mul(a, b) => taylor::mul_coeff(upto(c, a, s, p), upto(c, b, s, p), p),
-                Op::Div(a, b) => {
-                    taylor::div_coeff(upto(c, a, s, p), upto(c, b, s, p), upto(c, i, s, p), p)
-                }
-                Op::Neg(a) => -c[a * s + p],
-                Op::Scale(a, k) => k * c[a * s + p],
-                Op::Offset(a, k) => c[a * s + p] + if p == 0 { k } else { 0.0 },
-                Op::Sqrt(a) => taylor::sqrt_coeff(upto(c, a, s, p), upto(c, i, s, p), p),
-                Op::Powf(a, alpha) => {
-                    taylor::powf_coeff(upto(c, a, s, p), alpha, upto(c, i, s, p), p)
-                }
-                Op::Exp(a) => taylor::exp_coeff(upto(c, a, s, p), upto(c, i, s, p), p),
+        for &(op, i) in code {
+            let value = match op {
+                Op::Const(k) => k,
+                Op::Add(a, b) => c[a + p] + c[b + p],
+                Op::Sub(a, b) => c[a + p] - c[b + p],
+                Op::Mul(a, b) => taylor::mul_coeff(upto(c, a, p), upto(c, b, p), p),
+                Op::Div(a, b) => taylor::div_coeff(upto(c, a, p), upto(c, b, p), upto(c, i, p), p),
+                Op::Neg(a) => -c[a + p],
+                Op::Scale(a, k) => k * c[a + p],
+                Op::Offset(a, k) => c[a + p] + if p == 0 { k } else { 0.0 },
+                Op::Sqrt(a) => taylor::sqrt_coeff(upto(c, a, p), upto(c, i, p), p),
+                Op::Powf(a, alpha) => taylor::powf_coeff(upto(c, a, p), alpha, upto(c, i, p), p),
+                Op::Exp(a) => taylor::exp_coeff(upto(c, a, p), upto(c, i, p), p),
                 Op::Sin(a) => {
                     // sin_p reads cos_0..p-1 and cos_p reads sin_0..p-1.
-                    let sin = taylor::sin_coeff(upto(c, a, s, p), upto(c, i + 1, s, p), p);
-                    let cos = taylor::cos_coeff(upto(c, a, s, p), upto(c, i, s, p), p);
-                    c[i * s + p] = sin;
-                    c[(i + 1) * s + p] = cos;
-                    i += 2;
+                    let sin = taylor::sin_coeff(upto(c, a, p), upto(c, i + s, p), p);
+                    let cos = taylor::cos_coeff(upto(c, a, p), upto(c, i, p), p);
+                    c[i + p] = sin;
+                    c[i + s + p] = cos;
                     continue;
                 }
-                Op::CosOfPrevious => unreachable!("cosine nodes are propagated with their sine"),
+                Op::Input | Op::CosOfPrevious => unreachable!("not compiled"),
             };
-            c[i * s + p] = value;
-            i += 1;
+            c[i + p] = value;
         }
     }
 

@@ -77,7 +77,10 @@
 //! the fast amplitude left at t1 (the step-start transient test, applied to
 //! the end).
 
-use super::{DaeConfig, DaeProblem, Engine, Stepping, TimeStep, explicit_step, series_at};
+use super::{
+    DaeConfig, DaeProblem, Engine, Stepping, TimeStep, copy_series, explicit_step, series_at,
+    solve_series,
+};
 // (geometric_distance is reached as super::geometric_distance)
 use crate::error::{Error, Result};
 use crate::linalg::{DenseLu, norm};
@@ -121,9 +124,57 @@ pub(super) struct Chooser {
     pub output_points: usize,
     pub accepted: usize,
     pub rejected: usize,
+    /// The weights γ of the run's (m, n), and the LU of the Hermite
+    /// interpolation matrix per (k0, k1): the same for every step.
+    gammas: Option<Gammas>,
+    hermite: Vec<((usize, usize), DenseLu)>,
+    /// ln N! = sum_{k=2}^{N} ln k at index N, summed in that order (cached:
+    /// a logarithm per order and step otherwise).
+    ln_fact: Vec<f64>,
 }
 
 impl Chooser {
+    /// ln n! as [`fast_amplitude`] sums it.
+    fn ln_factorial(&mut self, n: usize) -> f64 {
+        if self.ln_fact.is_empty() {
+            // The empty sums (n = 0, 1) as `Iterator::sum` gives them.
+            self.ln_fact = vec![std::iter::empty::<f64>().sum(); 2];
+        }
+        while self.ln_fact.len() <= n {
+            let k = self.ln_fact.len();
+            let last = self.ln_fact[k - 1];
+            self.ln_fact.push(last + (k as f64).ln());
+        }
+        self.ln_fact[n]
+    }
+
+    /// The weights γ of (I2) [m/n] and of its error estimate (cached).
+    fn gammas(&mut self, m: usize, n: usize) -> &Gammas {
+        if self.gammas.as_ref().is_none_or(|g| (g.m, g.n) != (m, n)) {
+            self.gammas = Some(Gammas::new(m, n));
+        }
+        self.gammas.as_ref().expect("set above")
+    }
+
+    /// [`hermite_data`] with the matrix's LU cached per (k0, k1).
+    fn hermite_data(
+        &mut self,
+        y0: &[Vec<f64>],
+        y1: &[Vec<f64>],
+        h: f64,
+        k0: usize,
+        k1: usize,
+    ) -> Vec<Vec<f64>> {
+        let at = match self.hermite.iter().position(|(k, _)| *k == (k0, k1)) {
+            Some(at) => at,
+            None => {
+                self.hermite.push(((k0, k1), hermite_matrix(k0, k1)));
+                self.hermite.len() - 1
+            }
+        };
+        hermite_solve(&self.hermite[at].1, y0, y1, h, k0, k1)
+    }
+
     /// Explicit steps for 8, 16, 32 ... steps after an implicit try that
     /// did not pay; the next try starts again from the explicit length.
     fn back_off(&mut self) {
@@ -176,7 +227,7 @@ pub(super) fn step<P: DaeProblem + ?Sized>(
     let singular = super::geometric_distance(eng, &series0, n_ord).is_some();
     // A fast transient not yet decayed: the explicit steps resolve it (an
     // L-stable step would damp it at once, right at its end but not inside).
-    let d0 = fast_amplitude(&series0, eng.nd, n_ord, fast);
+    let d0 = fast_amplitude(&series0, eng.nd, n_ord, fast, ch.ln_factorial(n_ord));
     let scale0 =
         norm(u0).max(norm(&(0..eng.nd).map(|i| series0[i][1]).collect::<Vec<_>>()) * a_exp);
     let transient = d0 > cfg.eps * scale0;
@@ -220,7 +271,7 @@ pub(super) fn step<P: DaeProblem + ?Sized>(
                     // orders 0..k at both ends, k = 1 in a stiff step (the
                     // higher orders at t0 carry the fast mode times (h|A|)^k).
                     let k = if h * fast > 1.0 { 1 } else { m.min(n) };
-                    let dense = hermite_data(&series0, &series, h, k, k);
+                    let dense = ch.hermite_data(&series0, &series, h, k, k);
                     // The starting guess of the output times' iterations:
                     // orders 0..3 at both ends. Its fast content, about
                     // d (h |A|)^3 / 3! with d the ends' fast amplitude,
@@ -229,7 +280,7 @@ pub(super) fn step<P: DaeProblem + ?Sized>(
                     // h |A| up to 4e4), and only the solved points are
                     // output. Quasi-Newton iterations of the run from orders
                     // 1 / 2 / 3 / 4: 968 / 844 / 734 / 738.
-                    let start = hermite_data(&series0, &series, h, GUESS.min(m), GUESS.min(n));
+                    let start = ch.hermite_data(&series0, &series, h, GUESS.min(m), GUESS.min(n));
                     // Output times inside: solved by (I2) over t0 -> t.
                     let mut points = Vec::new();
                     let before = ch.iterations;
@@ -330,13 +381,13 @@ pub(super) fn step<P: DaeProblem + ?Sized>(
 /// Amplitude d of a fast mode e^(λ t) (|λ| = `fast`) that would explain the
 /// last term of the differential unknowns: |u_N| = d |λ|^N / N!, i.e.
 /// d = |u_N| N! / |λ|^N (in logarithms: |λ|^N overflows). An upper bound
-/// of the fast amplitude when the last term is fast-dominated.
-fn fast_amplitude(series: &[Vec<f64>], nd: usize, n_ord: usize, fast: f64) -> f64 {
+/// of the fast amplitude when the last term is fast-dominated. `ln_fact`:
+/// ln N! ([`Chooser::ln_factorial`]).
+fn fast_amplitude(series: &[Vec<f64>], nd: usize, n_ord: usize, fast: f64, ln_fact: f64) -> f64 {
     let last = norm(&(0..nd).map(|i| series[i][n_ord]).collect::<Vec<_>>());
     if last == 0.0 || fast == 0.0 {
         return 0.0;
     }
-    let ln_fact: f64 = (2..=n_ord).map(|k| (k as f64).ln()).sum();
     (last.ln() + ln_fact - n_ord as f64 * fast.ln()).exp()
 }
 
@@ -357,13 +408,14 @@ fn row_sum_norm(a: &[f64], nd: usize) -> f64 {
 /// returns A = dv/du (nd × nd, row-major) and d(v, z)/du (n × nd, row-major).
 fn ode_jacobian<P: DaeProblem + ?Sized>(eng: &mut Engine<P>) -> (Vec<f64>, Vec<f64>) {
     let (nd, n) = (eng.nd, eng.n());
-    let cols: Vec<usize> = (0..nd).collect();
-    let tangents = eng.tape.node_tangents(&cols);
+    // The tangents alone: no lists, nothing allocated.
+    eng.tape
+        .update_dense_tangents(&eng.u_cols, &mut eng.u_tangents);
     let mut dvz = vec![0.0; n * nd];
     let mut col = vec![0.0; n];
     for j in 0..nd {
         for (r, c) in col.iter_mut().enumerate() {
-            *c = -eng.tape.jacobian_entry(&tangents, r, j);
+            *c = -eng.tape.jacobian_entry(&eng.u_tangents, r, j);
         }
         if !eng.lu.solve_in_place(&mut col) {
             col.fill(f64::NAN);
@@ -394,13 +446,13 @@ fn attempt<P: DaeProblem + ?Sized>(
 ) -> Result<(Vec<Vec<f64>>, f64)> {
     let nd = eng.nd;
     let t1 = t0 + h;
+    // The weights γ (once per run) and the powers of h and -h (once per
+    // try): the same values as computed in place.
+    let gw = *ch.gammas(m, n);
+    let w = Powers::new(m.max(n), h);
     // Right side of (I2): sum_j γ(m, n, j) u0_j h^j.
     let rhs: Vec<f64> = (0..nd)
-        .map(|i| {
-            (0..=m)
-                .map(|j| gamma(m, n, j) * series0[i][j] * h.powi(j as i32))
-                .sum()
-        })
+        .map(|i| (0..=m).map(|j| gw.mn[j] * series0[i][j] * w.h[j]).sum())
         .collect();
     // Predictor: the series at t0 summed up to its smallest term (orders
     // 1..=m, the first local minimum of |u_j| h^j over the differential
@@ -411,20 +463,14 @@ fn attempt<P: DaeProblem + ?Sized>(
     // 1e-4 N: 1,129 steps, accepted with error ratios ~1e-6; 179 with this
     // predictor, README "Stiffness in time").
     // A given guess (y at t0 + h) replaces it.
-    let term = |j: usize| {
-        norm(
-            &(0..nd)
-                .map(|i| series0[i][j] * h.powi(j as i32))
-                .collect::<Vec<_>>(),
-        )
-    };
+    let term = |j: usize| norm(&(0..nd).map(|i| series0[i][j] * w.h[j]).collect::<Vec<_>>());
     let mut order = 1;
     while order < m && term(order + 1) < term(order) {
         order += 1;
     }
     let increment = |c: &[f64]| -> f64 {
         (1..=order.min(c.len() - 1))
-            .map(|j| c[j] * h.powi(j as i32))
+            .map(|j| c[j] * w.h[j])
             .sum::<f64>()
     };
     let mut u1: Vec<f64> = (0..nd).map(|i| u0[i] + increment(&series0[i])).collect();
@@ -441,21 +487,28 @@ fn attempt<P: DaeProblem + ?Sized>(
     let mut a: Vec<f64> = Vec::new();
     let mut lu = DenseLu::default();
     let mut last: Option<(Vec<f64>, Vec<f64>)> = None;
+    // The iterate's series, its G and a scratch vector (reused).
+    let mut s = Vec::new();
+    let mut r = vec![0.0; nd];
+    let mut scratch = vec![0.0; nd];
     for _ in 0..MAX_ITERATIONS {
         eng.newton(&u1, &mut vz1, t1, cfg.newton_tol, index)?;
-        let s = series_at(eng, &u1, &vz1, t1, index, n)?;
+        solve_series(eng, &u1, &vz1, t1, index, n)?;
+        copy_series(eng, &mut s);
         ch.iterations += 1;
         // G(u1) of (I2), and the magnitude of its terms (its round-off floor).
-        let mut r = vec![0.0; nd];
         let mut mag = 0.0f64;
         for i in 0..nd {
-            let terms = (0..=n).map(|j| gamma(n, m, j) * s[i][j] * (-h).powi(j as i32));
+            let terms = (0..=n).map(|j| gw.nm[j] * s[i][j] * w.minus_h[j]);
             r[i] = terms.clone().sum::<f64>() - rhs[i];
             mag = mag.max(terms.map(f64::abs).sum::<f64>());
         }
         // Scale of the local error: the first-order increment, or |u1|
         // itself when u barely moves (a relative tolerance per step).
-        let first = norm(&(0..nd).map(|i| s[i][1]).collect::<Vec<_>>());
+        for (x, c) in scratch.iter_mut().zip(&s) {
+            *x = c[1];
+        }
+        let first = norm(&scratch);
         let scale = (first * h).max(norm(&u1));
         let tol = (0.1 * cfg.eps * scale).max(16.0 * f64::EPSILON * mag);
         // The last update moved u1 by round-off only: G is at its floor
@@ -476,10 +529,10 @@ fn attempt<P: DaeProblem + ?Sized>(
             let mut g = vec![0.0; nd];
             for i in 0..nd {
                 g[i] = (0..=n)
-                    .map(|j| gamma(n, m - 1, j) * s[i][j] * (-h).powi(j as i32))
+                    .map(|j| gw.nm1[j] * s[i][j] * w.minus_h[j])
                     .sum::<f64>()
                     - (0..m)
-                        .map(|j| gamma(m - 1, n, j) * series0[i][j] * h.powi(j as i32))
+                        .map(|j| gw.m1n[j] * series0[i][j] * w.h[j])
                         .sum::<f64>();
             }
             let mp = two_point_matrix(&a, nd, h, n, m - 1);
@@ -500,7 +553,7 @@ fn attempt<P: DaeProblem + ?Sized>(
             // off-manifold iterate (ζ = 1e-6 N on friction-plane: end
             // amplitude 2.5e-11 against 1e-26 on accepted steps, v_x 150
             // times the slow velocity, a wrong Hermite interpolant inside).
-            let d1 = fast_amplitude(&s, nd, n, row_sum_norm(&a, nd));
+            let d1 = fast_amplitude(&s, nd, n, row_sum_norm(&a, nd), ch.ln_factorial(n));
             ratio = ratio.max(d1 / (cfg.eps * scale + f64::MIN_POSITIVE));
             // The algebraic unknowns (and velocities) that the fast mode does
             // not reach: the same formula defect on their own series, so that
@@ -518,11 +571,9 @@ fn attempt<P: DaeProblem + ?Sized>(
                     continue;
                 }
                 let defect = (0..=n)
-                    .map(|j| gamma(n, m - 1, j) * y[j] * (-h).powi(j as i32))
+                    .map(|j| gw.nm1[j] * y[j] * w.minus_h[j])
                     .sum::<f64>()
-                    - (0..m)
-                        .map(|j| gamma(m - 1, n, j) * y0[j] * h.powi(j as i32))
-                        .sum::<f64>();
+                    - (0..m).map(|j| gw.m1n[j] * y0[j] * w.h[j]).sum::<f64>();
                 ratio = ratio.max(defect.abs() / (cfg.eps * scale_k + f64::MIN_POSITIVE));
             }
             return Ok((s, ratio));
@@ -530,7 +581,7 @@ fn attempt<P: DaeProblem + ?Sized>(
         if !r.iter().all(|x| x.is_finite()) {
             break;
         }
-        if let Some((du, r_old)) = &last {
+        if let Some((du, r_old)) = &mut last {
             // Broyden: M += (ΔG - M Δu) Δuᵀ / (Δuᵀ Δu).
             let dd: f64 = du.iter().map(|x| x * x).sum();
             if dd > 0.0 {
@@ -544,8 +595,12 @@ fn attempt<P: DaeProblem + ?Sized>(
             }
         }
         lu.factorize(nd, |i, j| mat[i * nd + j]);
-        let mut du: Vec<f64> = r.iter().map(|x| -x).collect();
-        if !lu.solve_in_place(&mut du) || !du.iter().all(|x| x.is_finite()) {
+        // Δu and G of this iterate into the previous one's vectors.
+        let (du, r_old) = last.get_or_insert_with(|| (vec![0.0; nd], vec![0.0; nd]));
+        for (d, x) in du.iter_mut().zip(&r) {
+            *d = -x;
+        }
+        if !lu.solve_in_place(du) || !du.iter().all(|x| x.is_finite()) {
             break;
         }
         for i in 0..nd {
@@ -555,7 +610,7 @@ fn attempt<P: DaeProblem + ?Sized>(
         for (k, x) in vz1.iter_mut().enumerate() {
             *x += (0..nd).map(|j| dvz[k * nd + j] * du[j]).sum::<f64>();
         }
-        last = Some((du, r));
+        r_old.copy_from_slice(&r);
     }
     Err(Error::NoConvergence {
         step: index,
@@ -573,24 +628,41 @@ fn attempt<P: DaeProblem + ?Sized>(
 /// coefficients in s). Inside a stiff step the high orders carry the fast
 /// mode's amplitude times (h |A|)^k: the caller takes k = 1 there. Used
 /// between the output times, which (I2) solves for itself.
+#[cfg(test)]
 fn hermite_data(y0: &[Vec<f64>], y1: &[Vec<f64>], h: f64, k0: usize, k1: usize) -> Vec<Vec<f64>> {
-    let size = k0 + k1 + 2;
-    // Rows 0..=k0: P^(j)(0)/j! = c_j; the next k1 + 1 rows:
-    // P^(j)(1)/j! = sum_i C(i, j) c_i.
+    hermite_solve(&hermite_matrix(k0, k1), y0, y1, h, k0, k1)
+}
+
+/// The LU of the matrix of [`hermite_data`]: rows 0..=k0: P^(j)(0)/j! =
+/// c_j; the next k1 + 1 rows: P^(j)(1)/j! = sum_i C(i, j) c_i.
+fn hermite_matrix(k0: usize, k1: usize) -> DenseLu {
     let mut lu = DenseLu::default();
-    lu.factorize(size, |r, c| {
+    lu.factorize(k0 + k1 + 2, |r, c| {
         if r <= k0 {
             f64::from(u8::from(r == c))
         } else {
             binomial(c, r - k0 - 1)
         }
     });
+    lu
+}
+
+/// [`hermite_data`] with the matrix's LU given.
+fn hermite_solve(
+    lu: &DenseLu,
+    y0: &[Vec<f64>],
+    y1: &[Vec<f64>],
+    h: f64,
+    k0: usize,
+    k1: usize,
+) -> Vec<Vec<f64>> {
+    let powers: Vec<f64> = (0..=k0.max(k1)).map(|j| h.powi(j as i32)).collect();
     y0.iter()
         .zip(y1)
         .map(|(a, b)| {
             let mut rhs: Vec<f64> = (0..=k0)
-                .map(|j| a[j] * h.powi(j as i32))
-                .chain((0..=k1).map(|j| b[j] * h.powi(j as i32)))
+                .map(|j| a[j] * powers[j])
+                .chain((0..=k1).map(|j| b[j] * powers[j]))
                 .collect();
             lu.solve_in_place(&mut rhs);
             rhs
@@ -602,8 +674,13 @@ fn hermite_data(y0: &[Vec<f64>], y1: &[Vec<f64>], h: f64, k0: usize, k1: usize) 
 /// (nd × nd, row-major), by Horner.
 fn two_point_matrix(a: &[f64], nd: usize, h: f64, n: usize, m: usize) -> Vec<f64> {
     let mut mat = identity(nd);
+    // Horner's partial products alternate between two matrices.
+    let mut next = identity(nd);
     for p in (1..=n).rev() {
-        let mut next = identity(nd);
+        next.fill(0.0);
+        for i in 0..nd {
+            next[i * nd + i] = 1.0;
+        }
         let c = -h * gamma(n, m, p) / gamma(n, m, p - 1);
         for i in 0..nd {
             for j in 0..nd {
@@ -611,9 +688,51 @@ fn two_point_matrix(a: &[f64], nd: usize, h: f64, n: usize, m: usize) -> Vec<f64
                 next[i * nd + j] += c * acc;
             }
         }
-        mat = next;
+        std::mem::swap(&mut mat, &mut next);
     }
     mat
+}
+
+/// The weights γ of (I2) [m/n] and of its error estimate [m-1/n],
+/// j = 0..=max(m, n) (each γ is a product of up to n quotients; m, n are at
+/// most HO_M, HO_N).
+#[derive(Clone, Copy, Debug)]
+struct Gammas {
+    m: usize,
+    n: usize,
+    mn: [f64; HO_N + 1],
+    nm: [f64; HO_N + 1],
+    m1n: [f64; HO_N + 1],
+    nm1: [f64; HO_N + 1],
+}
+
+impl Gammas {
+    fn new(m: usize, n: usize) -> Self {
+        let table = |a: usize, b: usize| std::array::from_fn(|j| gamma(a, b, j));
+        Self {
+            m,
+            n,
+            mn: table(m, n),
+            nm: table(n, m),
+            m1n: table(m.saturating_sub(1), n),
+            nm1: table(n, m.saturating_sub(1)),
+        }
+    }
+}
+
+/// h^j and (-h)^j, j = 0..=max(m, n).
+struct Powers {
+    h: Vec<f64>,
+    minus_h: Vec<f64>,
+}
+
+impl Powers {
+    fn new(top: usize, h: f64) -> Self {
+        Self {
+            h: (0..=top).map(|j| h.powi(j as i32)).collect(),
+            minus_h: (0..=top).map(|j| (-h).powi(j as i32)).collect(),
+        }
+    }
 }
 
 /// C(i, j) (0 when j > i).
