@@ -790,32 +790,36 @@ impl ShellModel {
                 })
                 .collect();
         }
-        let mut ps = Vec::with_capacity(self.active.len());
-        for &ip in &self.active {
-            let pair = &self.pairs[ip];
-            let x = self.x0[pair.node] + Self::vec3(&full, pair.node, 0);
-            let mut gap = GapSeries::start(&obstacles[pair.obstacle], &x)
-                .ok_or_else(|| self.gap_error(pair.node, f64::NAN))?;
-            // Orders 0 … N − 1 completed, and the starred order N pushed by
-            // the last right-hand side: N + 1 = self.orders.
-            gap.reserve(self.orders);
-            let mut r = Vec::with_capacity(self.orders);
-            r.push(pair.law.force(gap.h[0]));
-            let log_r = LogReaction::start(
-                self.contact_arclength,
-                &pair.law,
-                gap.h[0],
-                r[0],
-                self.orders,
-            );
-            ps.push(PairSeries {
-                pair: ip,
-                gap,
-                r,
-                r_star: 0.0,
-                log_r,
-            });
-        }
+        let ps = self
+            .active
+            .par_iter()
+            .with_min_len(PAR_MIN)
+            .map(|&ip| {
+                let pair = &self.pairs[ip];
+                let x = self.x0[pair.node] + Self::vec3(&full, pair.node, 0);
+                let mut gap = GapSeries::start(&obstacles[pair.obstacle], &x)
+                    .ok_or_else(|| self.gap_error(pair.node, f64::NAN))?;
+                // Orders 0 … N − 1 completed, and the starred order N pushed
+                // by the last right-hand side: N + 1 = self.orders.
+                gap.reserve(self.orders);
+                let mut r = Vec::with_capacity(self.orders);
+                r.push(pair.law.force(gap.h[0]));
+                let log_r = LogReaction::start(
+                    self.contact_arclength,
+                    &pair.law,
+                    gap.h[0],
+                    r[0],
+                    self.orders,
+                );
+                Ok(PairSeries {
+                    pair: ip,
+                    gap,
+                    r,
+                    r_star: 0.0,
+                    log_r,
+                })
+            })
+            .collect::<Result<Vec<_>>>()?;
         self.pair_series = ps;
         Ok(())
     }
@@ -851,15 +855,44 @@ impl ShellModel {
         self.pair_series
             .par_iter_mut()
             .with_min_len(PAR_MIN)
-            .for_each(|ps| {
-                let pair = &pairs[ps.pair];
-                let m = ps.gap.orders();
-                let v = motions[pair.obstacle].velocity();
-                ps.gap.complete(&(Self::vec3(full, pair.node, 0) - v * lm));
-                let rm = pair.law.force_coeff(&ps.r, &ps.gap.h, m);
-                ps.r.push(rm);
-                ps.log_r.complete(&ps.r);
-            });
+            .for_each(|ps| Self::complete_pair(pairs, motions, ps, full, lm));
+    }
+
+    /// Completes a pair's series with its node's order-m coefficients in
+    /// `full` (the obstacle's motion lm V taken off).
+    fn complete_pair(
+        pairs: &[ContactPair],
+        motions: &[Motion],
+        ps: &mut PairSeries,
+        full: &[f64],
+        lm: f64,
+    ) {
+        let pair = &pairs[ps.pair];
+        let m = ps.gap.orders();
+        let v = motions[pair.obstacle].velocity();
+        ps.gap.complete(&(Self::vec3(full, pair.node, 0) - v * lm));
+        let rm = pair.law.force_coeff(&ps.r, &ps.gap.h, m);
+        ps.r.push(rm);
+        ps.log_r.complete(&ps.r);
+    }
+
+    /// A pair's order-p force without its unknown term: the law's order p
+    /// with h_p = h*_p and r_p = 0, on the series themselves (pushed, then
+    /// popped); keeps r*_p for the arc coordinates.
+    fn pair_force_star(pairs: &[ContactPair], ps: &mut PairSeries, p: usize) -> Vec3 {
+        let pair = &pairs[ps.pair];
+        let (hs, ns) = ps.gap.starred();
+        ps.gap.h.push(hs);
+        ps.r.push(0.0);
+        let rs = pair.law.force_coeff(&ps.r, &ps.gap.h, p);
+        ps.gap.h.pop();
+        ps.r.pop();
+        ps.r_star = rs;
+        let mut f = ns * ps.r[0] + ps.gap.normal(0) * rs;
+        for q in 1..p {
+            f += ps.gap.normal(p - q) * ps.r[q];
+        }
+        f
     }
 }
 
@@ -1037,9 +1070,12 @@ impl ContinuationProblem for ShellModel {
             }
         }
         let prescribed = &self.prescribed;
-        let mut add = |free: &[Option<usize>], rl: &mut [f64], gi: usize, gj: usize, v: f64| match (
-            free[gi], free[gj],
-        ) {
+        let add = |k: &mut SparseMatrix,
+                   free: &[Option<usize>],
+                   rl: &mut [f64],
+                   gi: usize,
+                   gj: usize,
+                   v: f64| match (free[gi], free[gj]) {
             (Some(i), Some(j)) => k.add(i, j, v),
             (Some(_), None) => rl[gi] += v * prescribed[gj],
             _ => {}
@@ -1054,6 +1090,7 @@ impl ContinuationProblem for ShellModel {
                 rl[dof(c.node, 3 + i)] -= fw[i];
                 for j in 0..3 {
                     add(
+                        &mut k,
                         &self.free,
                         &mut rl,
                         dof(c.node, 3 + i),
@@ -1072,19 +1109,44 @@ impl ContinuationProblem for ShellModel {
                 rl[ga] -= f[a / 3][a % 3];
                 for b in 0..12 {
                     let gb = dof(pr.nodes[b / 3], b % 3);
-                    add(&self.free, &mut rl, ga, gb, -lambda * kf[a][b]);
+                    add(&mut k, &self.free, &mut rl, ga, gb, -lambda * kf[a][b]);
                 }
             }
         }
         let obstacles = self.obstacles_at(lambda);
-        for &ip in &self.active {
-            let (node, kc) = self.contact_block(ip, &full, &obstacles, lambda)?;
+        let blocks: Vec<_> = self
+            .active
+            .par_iter()
+            .with_min_len(PAR_MIN)
+            .map(|&ip| self.contact_block(ip, &full, &obstacles, lambda))
+            .collect::<Result<_>>()?;
+        for (&ip, (node, kc)) in self.active.iter().zip(blocks) {
             // The gap reads x − lambda V: the lambda column is −K_c V.
             let vel = self.motions[self.pairs[ip].obstacle].velocity();
-            for i in 0..3 {
-                for j in 0..3 {
-                    add(&self.free, &mut rl, dof(node, i), dof(node, j), kc[i][j]);
-                    rl[dof(node, i)] -= kc[i][j] * vel[j];
+            let rows = [0, 1, 2].map(|i| self.free[dof(node, i)]);
+            if let [Some(a), Some(b), Some(c)] = rows {
+                // A free node: its rows are one run of each column.
+                for (j, col) in [a, b, c].into_iter().enumerate() {
+                    k.add_sorted_rows(&[a, b, c], col, &[kc[0][j], kc[1][j], kc[2][j]]);
+                }
+                for i in 0..3 {
+                    for j in 0..3 {
+                        rl[dof(node, i)] -= kc[i][j] * vel[j];
+                    }
+                }
+            } else {
+                for i in 0..3 {
+                    for j in 0..3 {
+                        add(
+                            &mut k,
+                            &self.free,
+                            &mut rl,
+                            dof(node, i),
+                            dof(node, j),
+                            kc[i][j],
+                        );
+                        rl[dof(node, i)] -= kc[i][j] * vel[j];
+                    }
                 }
             }
         }
@@ -1138,25 +1200,46 @@ impl ContinuationProblem for ShellModel {
         // on the pool's threads (the main thread is one of them) would
         // split the large free blocks of this thread's heap.
         let mut forces = vec![[0.0; NDOF_EL]; self.elements.len()];
-        forces
-            .par_chunks_mut(PAR_MIN)
-            .zip(self.elements.par_chunks(PAR_MIN))
-            .zip(self.el_series.par_chunks_mut(PAR_MIN))
-            .for_each(|((out, elements), series)| {
-                for i in 0..elements.len() {
-                    if let (Some(e), Some(st)) = (elements.get(i + 1), series.get(i + 1)) {
-                        if st.has_ahead(p) {
-                            st.prefetch_outer(e);
-                        } else {
-                            st.prefetch(e);
+        let mut pair_forces = vec![Vec3::zeros(); self.pair_series.len()];
+        let (elements, el_series) = (&self.elements, &mut self.el_series);
+        let (pairs, motions, pair_series) = (&self.pairs, &self.motions, &mut self.pair_series);
+        let lm = lambda[p - 1];
+        // The elements and the contact pairs at once: the threads that
+        // finish one take work from the other.
+        rayon::join(
+            || {
+                forces
+                    .par_chunks_mut(PAR_MIN)
+                    .zip(elements.par_chunks(PAR_MIN))
+                    .zip(el_series.par_chunks_mut(PAR_MIN))
+                    .for_each(|((out, elements), series)| {
+                        for i in 0..elements.len() {
+                            if let (Some(e), Some(st)) = (elements.get(i + 1), series.get(i + 1)) {
+                                if st.has_ahead(p) {
+                                    st.prefetch_outer(e);
+                                } else {
+                                    st.prefetch(e);
+                                }
+                            }
+                            let e = &elements[i];
+                            let (x, d) = Self::element_coefficients(e, &full);
+                            out[i] = series[i].complete_and_rhs(e, &x, &d);
                         }
-                    }
-                    let e = &elements[i];
-                    let (x, d) = Self::element_coefficients(e, &full);
-                    out[i] = series[i].complete_and_rhs(e, &x, &d);
-                }
-            });
-        self.complete_pairs(&full, lambda[p - 1]);
+                    })
+            },
+            // Each pair completed with order p − 1, then its order-p force
+            // (buffers sized at the step start: no allocation here).
+            || {
+                pair_forces
+                    .par_iter_mut()
+                    .zip(pair_series.par_iter_mut())
+                    .with_min_len(PAR_MIN)
+                    .for_each(|(f, ps)| {
+                        Self::complete_pair(pairs, motions, ps, &full, lm);
+                        *f = Self::pair_force_star(pairs, ps, p);
+                    })
+            },
+        );
         let mut rhs = vec![0.0; self.free.len()];
         for (e, f) in self.elements.iter().zip(&forces) {
             for (i, &n) in e.nodes.iter().enumerate() {
@@ -1211,31 +1294,7 @@ impl ContinuationProblem for ShellModel {
                 }
             }
         }
-        // Contact pairs in parallel (their buffers sized at the step start:
-        // no allocation here), added in pair order.
-        let pairs = &self.pairs;
-        let pair_forces: Vec<Vec3> = self
-            .pair_series
-            .par_iter_mut()
-            .with_min_len(PAR_MIN)
-            .map(|ps| {
-                let pair = &pairs[ps.pair];
-                let (hs, ns) = ps.gap.starred();
-                // The law's order p with h_p = h*_p and r_p = 0, on the
-                // series themselves (pushed, then popped).
-                ps.gap.h.push(hs);
-                ps.r.push(0.0);
-                let rs = pair.law.force_coeff(&ps.r, &ps.gap.h, p);
-                ps.gap.h.pop();
-                ps.r.pop();
-                ps.r_star = rs;
-                let mut f = ns * ps.r[0] + ps.gap.normal(0) * rs;
-                for q in 1..p {
-                    f += ps.gap.normal(p - q) * ps.r[q];
-                }
-                f
-            })
-            .collect();
+        // Added in pair order.
         for (ps, f) in self.pair_series.iter().zip(&pair_forces) {
             let node = self.pairs[ps.pair].node;
             for k in 0..3 {
