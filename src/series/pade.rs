@@ -16,6 +16,34 @@ use crate::linalg::{dot, norm};
 /// the previous ones (its denominator coefficients would be noise).
 const DEPENDENT: f64 = 1e-9;
 
+/// a·b in 8 interleaved partial sums. The orthogonalization takes ~n²/2
+/// dot products over all the unknowns, and one running sum waits for each
+/// addition (latency-bound: 4.6 ms per step at 25,200 unknowns, N = 15);
+/// 8 sums run at the speed of the loads. The rounding differs from
+/// [`dot`]'s by the usual few ulps of the sum's magnitudes.
+fn dot_interleaved(a: &[f64], b: &[f64]) -> f64 {
+    let (ca, cb) = (a.chunks_exact(8), b.chunks_exact(8));
+    let tail: f64 = dot(ca.remainder(), cb.remainder());
+    let mut s = [0.0; 8];
+    for (x, y) in ca.zip(cb) {
+        for i in 0..8 {
+            s[i] += x[i] * y[i];
+        }
+    }
+    ((s[0] + s[4]) + (s[1] + s[5])) + ((s[2] + s[6]) + (s[3] + s[7])) + tail
+}
+
+/// |a| by [`dot_interleaved`]; by [`norm`] where the sum of squares leaves
+/// the normal range (its scaled path).
+fn norm_interleaved(a: &[f64]) -> f64 {
+    let s = dot_interleaved(a, a);
+    if s.is_finite() && s >= f64::MIN_POSITIVE {
+        s.sqrt()
+    } else {
+        norm(a)
+    }
+}
+
 /// Common-denominator Padé approximant built from `terms[1..=n]` (fewer when
 /// the last terms are numerically dependent; see [`Pade::terms_used`]).
 #[derive(Clone, Debug)]
@@ -47,7 +75,7 @@ impl Orthogonalized {
         for k in 1..=n {
             let mut w = terms[k].clone();
             for j in 1..k.min(m + 1) {
-                let a = dot(&w, &basis[j - 1]);
+                let a = dot_interleaved(&w, &basis[j - 1]);
                 alpha[k - 1][j - 1] = a;
                 // Modified Gram-Schmidt: subtract as we go.
                 for (wi, bi) in w.iter_mut().zip(&basis[j - 1]) {
@@ -55,8 +83,8 @@ impl Orthogonalized {
                 }
             }
             if k <= m {
-                let nk = norm(&w);
-                if !(nk > DEPENDENT * norm(&terms[k])) {
+                let nk = norm_interleaved(&w);
+                if !(nk > DEPENDENT * norm_interleaved(&terms[k])) {
                     // W_k is (numerically) in the span of W_1..W_{k-1}: build
                     // the approximant from W_1..W_k instead, whose W_k is
                     // then exactly represented by the basis.
@@ -339,5 +367,26 @@ mod tests {
                 );
             }
         }
+    }
+
+    /// The interleaved sums give the dot product and the norm to round-off,
+    /// for lengths that are not multiples of 8, and the norm keeps its
+    /// scaled path past the normal range of the sum of squares.
+    #[test]
+    fn interleaved_dot_and_norm_match_the_plain_ones() {
+        for len in [0, 1, 7, 8, 9, 1001] {
+            let a: Vec<f64> = (0..len).map(|i| (0.37 * i as f64).sin()).collect();
+            let b: Vec<f64> = (0..len).map(|i| (0.11 * i as f64 + 1.0).cos()).collect();
+            let scale = dot(
+                &a.iter().map(|x| x.abs()).collect::<Vec<_>>(),
+                &vec![1.0; len],
+            );
+            assert!((dot_interleaved(&a, &b) - dot(&a, &b)).abs() <= 1e-15 * scale.max(1.0));
+            assert!((norm_interleaved(&a) - norm(&a)).abs() <= 1e-15 * norm(&a).max(1.0));
+        }
+        let big = vec![1e200, -3e200, 2e199];
+        assert!(dot_interleaved(&big, &big).is_infinite());
+        assert_eq!(norm_interleaved(&big), norm(&big));
+        assert!(norm_interleaved(&big).is_finite());
     }
 }
