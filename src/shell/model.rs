@@ -790,36 +790,66 @@ impl ShellModel {
                 })
                 .collect();
         }
-        let ps = self
-            .active
-            .par_iter()
-            .with_min_len(PAR_MIN)
-            .map(|&ip| {
-                let pair = &self.pairs[ip];
-                let x = self.x0[pair.node] + Self::vec3(&full, pair.node, 0);
-                let mut gap = GapSeries::start(&obstacles[pair.obstacle], &x)
-                    .ok_or_else(|| self.gap_error(pair.node, f64::NAN))?;
-                // Orders 0 … N − 1 completed, and the starred order N pushed
-                // by the last right-hand side: N + 1 = self.orders.
-                gap.reserve(self.orders);
-                let mut r = Vec::with_capacity(self.orders);
-                r.push(pair.law.force(gap.h[0]));
-                let log_r = LogReaction::start(
-                    self.contact_arclength,
-                    &pair.law,
-                    gap.h[0],
-                    r[0],
-                    self.orders,
-                );
-                Ok(PairSeries {
-                    pair: ip,
-                    gap,
-                    r,
-                    r_star: 0.0,
-                    log_r,
-                })
-            })
-            .collect::<Result<Vec<_>>>()?;
+        let same_pairs = self.pair_series.len() == self.active.len()
+            && self
+                .pair_series
+                .iter()
+                .zip(&self.active)
+                .all(|(ps, &ip)| ps.pair == ip);
+        if same_pairs {
+            // Restarted in place, in parallel (no allocation: at a million
+            // unknowns, building them anew took ~0.8 s per step on one
+            // thread, and 0.5 GB more peak memory on two).
+            let (pairs, x0, orders, c) =
+                (&self.pairs, &self.x0, self.orders, self.contact_arclength);
+            let undefined = self
+                .pair_series
+                .par_iter_mut()
+                .with_min_len(PAR_MIN)
+                .find_map_first(|ps| {
+                    let pair = &pairs[ps.pair];
+                    let x = x0[pair.node] + Self::vec3(&full, pair.node, 0);
+                    if ps.gap.restart(&obstacles[pair.obstacle], &x).is_none() {
+                        return Some(pair.node);
+                    }
+                    ps.gap.reserve(orders);
+                    ps.r.clear();
+                    ps.r.push(pair.law.force(ps.gap.h[0]));
+                    ps.log_r.restart(c, &pair.law, ps.gap.h[0], ps.r[0]);
+                    ps.r_star = 0.0;
+                    None
+                });
+            return match undefined {
+                Some(node) => Err(self.gap_error(node, f64::NAN)),
+                None => Ok(()),
+            };
+        }
+        let mut ps = Vec::with_capacity(self.active.len());
+        for &ip in &self.active {
+            let pair = &self.pairs[ip];
+            let x = self.x0[pair.node] + Self::vec3(&full, pair.node, 0);
+            let mut gap = GapSeries::start(&obstacles[pair.obstacle], &x)
+                .ok_or_else(|| self.gap_error(pair.node, f64::NAN))?;
+            // Orders 0 … N − 1 completed, and the starred order N pushed by
+            // the last right-hand side: N + 1 = self.orders.
+            gap.reserve(self.orders);
+            let mut r = Vec::with_capacity(self.orders);
+            r.push(pair.law.force(gap.h[0]));
+            let log_r = LogReaction::start(
+                self.contact_arclength,
+                &pair.law,
+                gap.h[0],
+                r[0],
+                self.orders,
+            );
+            ps.push(PairSeries {
+                pair: ip,
+                gap,
+                r,
+                r_star: 0.0,
+                log_r,
+            });
+        }
         self.pair_series = ps;
         Ok(())
     }
