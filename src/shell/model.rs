@@ -1045,9 +1045,10 @@ impl ContinuationProblem for ShellModel {
                 .map_init(FullMapCache::default, |cache, (st, e)| st.tangent(e, cache))
                 .collect();
             let first = chunk * TANGENT_CHUNK;
-            let threads = rayon::current_num_threads();
-            let blocks = (threads > 1 && self.slots.len() == self.elements.len())
-                .then(|| k.column_blocks(threads))
+            // One block per thread (one on one thread); element by element
+            // with searches where the slots did not fit 32 bits.
+            let blocks = (self.slots.len() == self.elements.len())
+                .then(|| k.column_blocks(rayon::current_num_threads()))
                 .flatten();
             match blocks {
                 // Each thread adds to its own columns, every element in
