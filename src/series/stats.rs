@@ -22,6 +22,10 @@ pub struct Stats {
     /// Steps ended at a kink of a piecewise-analytic problem (super::kinks).
     #[serde(default)]
     pub kink_cuts: usize,
+    /// Singular points of the geometric-series test that the path got past
+    /// (complex, near the real axis: the DAE engine's look-ahead).
+    #[serde(default)]
+    pub singularities_passed: usize,
     /// Seconds spent assembling tangents (and residuals).
     pub assembly_s: f64,
     pub factorization_s: f64,

@@ -103,7 +103,7 @@ const GUESS: usize = 3;
 const MAX_ITERATIONS: usize = 10;
 
 /// State of the per-step choice between the explicit and implicit steps.
-#[derive(Debug, Default)]
+#[derive(Clone, Debug, Default)]
 pub(super) struct Chooser {
     /// Next implicit step length (from the last accepted implicit step).
     h: Option<f64>,
