@@ -158,8 +158,15 @@ pub fn run(scene: &FrictionScene, out_dir: Option<&Path>, progress: bool) -> Res
             (Some(e), _) => Some(e.to_string()),
             (None, "singularity") => Some(match result.t_singular {
                 Some(ts) => format!(
-                    "at t = {:.9} s the series became geometric (Cochelin-Medale test): a singular point at t* = {ts:.9} s ends the smooth quasi-static solution",
-                    result.t
+                    "at t = {:.9} s the series became geometric (Cochelin-Medale test): a singular point at t* = {ts:.9} s ends the smooth quasi-static solution{}",
+                    result.t,
+                    match result.collapse_ahead {
+                        Some(at) => format!(
+                            " (followed on without output to see whether it gets past the point, the path's step fell below solver.min_step = {:.3e} s at t = {at:.9} s)",
+                            scene.min_step
+                        ),
+                        None => String::new(),
+                    }
                 ),
                 None => format!(
                     "the series step length fell below solver.min_step = {:.3e} s at t = {:.9} s: the solution stops being smooth there",

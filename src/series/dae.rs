@@ -199,6 +199,11 @@ pub struct DaeResult {
     pub t: f64,
     /// Located singular point: t0 + alpha_1 from the geometric-series test.
     pub t_singular: Option<f64>,
+    /// Where the path, followed on from a singular point without output to
+    /// see whether it gets past ([`singular_ahead`]), took a step shorter
+    /// than `min_step` (a fast transient the explicit steps cannot resolve
+    /// at that order, or the singular point itself).
+    pub collapse_ahead: Option<f64>,
     /// Every step whose series was geometric: (t0, located singular point).
     pub events: Vec<(f64, f64)>,
     pub error: Option<Error>,
@@ -486,6 +491,7 @@ fn run_with<P: DaeProblem + ?Sized>(
             .unwrap_or_else(|| stop.to_string()),
         t,
         t_singular: None,
+        collapse_ahead: None,
         events: Vec::new(),
         error,
         initial_residual: r0,
@@ -518,11 +524,11 @@ fn run_with<P: DaeProblem + ?Sized>(
         }
         match implicit::step(&mut eng, chooser, &u, &vz, t, index, cfg) {
             Ok(step)
-                if step.geometric.is_some_and(|d| {
-                    cfg.stop_at_singularity
-                        && t + d > regular_until
-                        && singular_ahead(&mut eng, chooser, &step, d, index, cfg)
-                }) =>
+                if let Some(ahead) = step
+                    .geometric
+                    .filter(|&d| cfg.stop_at_singularity && t + d > regular_until)
+                    .map(|d| singular_ahead(&mut eng, chooser, &step, d, index, cfg))
+                    && ahead != Ahead::Regular =>
             {
                 // The last terms form a geometric series: a singular point
                 // lies at t0 + alpha_1, within reach of this step, and the
@@ -532,6 +538,9 @@ fn run_with<P: DaeProblem + ?Sized>(
                 events.push((t, t_star));
                 let mut r = finish(eng.stats, "singularity", t, None, r0);
                 r.t_singular = Some(t_star);
+                if let Ahead::Collapsed(at) = ahead {
+                    r.collapse_ahead = Some(at);
+                }
                 return finish_with_events(r, events);
             }
             Ok(step) => {
@@ -625,7 +634,7 @@ fn singular_ahead<P: DaeProblem + ?Sized>(
     d: f64,
     index: usize,
     cfg: &DaeConfig,
-) -> bool {
+) -> Ahead {
     let nd = eng.nd;
     let mut ch = chooser.clone();
     let (t_star, past) = (step.t0 + d, (step.t0 + PAST * d).min(cfg.t_end));
@@ -641,34 +650,47 @@ fn singular_ahead<P: DaeProblem + ?Sized>(
                 .newton(&u, &mut vz, t, cfg.newton_tol, index + k)
                 .is_err()
         {
-            return true;
+            return Ahead::Singular;
         }
         if t >= past {
-            return false;
+            return Ahead::Regular;
         }
         if (0.0..=CLOSE_IN * d).contains(&(t_star - t)) {
-            return true;
+            return Ahead::Singular;
         }
-        let Ok(next) = implicit::step(eng, &mut ch, &u, &vz, t, index + k, cfg) else {
-            return true;
+        let next = match implicit::step(eng, &mut ch, &u, &vz, t, index + k, cfg) {
+            Ok(next) => next,
+            Err(Error::StepCollapse { at, .. }) => return Ahead::Collapsed(at),
+            Err(_) => return Ahead::Singular,
         };
         let seen = next
             .geometric
             .is_some_and(|g| (next.t0 + g - t_star).abs() <= SAME_POINT * d);
         same = if seen { same + 1 } else { 0 };
         if same >= CONFIRMATIONS {
-            return true;
+            return Ahead::Singular;
         }
         t = (next.t0 + next.length).min(cfg.t_end);
         let y = next.eval(t);
         if y.iter().any(|x| !x.is_finite()) {
-            return true;
+            return Ahead::Singular;
         }
         u.copy_from_slice(&y[..nd]);
         vz.copy_from_slice(&y[nd..]);
         end_residual = next.end_residual;
     }
-    true
+    Ahead::Singular
+}
+
+/// What [`singular_ahead`] found.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Ahead {
+    /// The path got past the point.
+    Regular,
+    /// It did not.
+    Singular,
+    /// A step fell below `min_step` at this time before it got past.
+    Collapsed(f64),
 }
 
 /// The Taylor series (u, v, z) of the solution through (u0, vz0) at t0, each
