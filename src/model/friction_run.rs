@@ -46,16 +46,68 @@ pub struct FrictionRun {
     pub implicit: crate::series::dae::ImplicitCounts,
 }
 
+/// The regularization omega from which [`start_in_omega`] continues.
+const OMEGA_START: f64 = 1.0;
+/// Its stages: omega divided by this factor per stage.
+const OMEGA_FACTOR: f64 = 3.0;
+
+/// The starting guess of the Newton initialization, continued in omega where
+/// Newton does not converge from it at the scene's omega. A steep law (q
+/// below 1, small omega: |v_s|^(q-1) with |v_s| ~ omega Vc) leaves damped
+/// Newton in a minimum of |F| that is not a root (friction-plane, zeta =
+/// omega = 1e-2, q = 0.5: |F| = 2.0e-3 after 100 iterations). From omega =
+/// `OMEGA_START`, where the law is smooth, each stage solves at omega /
+/// `OMEGA_FACTOR` from the last stage's root, down to the scene's omega;
+/// the run's own Newton then starts from that root. Returns the guess
+/// unchanged (0 stages) where Newton converges from it, or where a stage
+/// fails (the run then reports its own failure).
+fn start_in_omega(
+    scene: &FrictionScene,
+    model: &dyn FrictionModel,
+    v: Vec<f64>,
+    z: Vec<f64>,
+) -> (Vec<f64>, Vec<f64>, usize) {
+    let u0 = model.u0();
+    let nd = v.len();
+    let solve = |m: &dyn FrictionModel, vz: &mut Vec<f64>| {
+        dae::consistent(m, &u0, vz, 0.0, scene.newton_tol).is_ok()
+    };
+    let mut vz = [v.clone(), z.clone()].concat();
+    if solve(model, &mut vz) || scene.friction.omega >= OMEGA_START {
+        return (v, z, 0);
+    }
+    let mut vz = [v.clone(), z.clone()].concat();
+    let mut omega = OMEGA_START;
+    let mut stages = 0;
+    loop {
+        let mut at = scene.clone();
+        at.friction.omega = omega;
+        if !solve(build(&at).as_ref(), &mut vz) {
+            return (v, z, 0);
+        }
+        stages += 1;
+        if omega <= scene.friction.omega {
+            return (vz[..nd].to_vec(), vz[nd..].to_vec(), stages);
+        }
+        omega = (omega / OMEGA_FACTOR).max(scene.friction.omega);
+    }
+}
+
 /// Solves the scene; writes the outputs into `out_dir` when given.
 pub fn run(scene: &FrictionScene, out_dir: Option<&Path>, progress: bool) -> Result<FrictionRun> {
     let model = build(scene);
     let model: &dyn FrictionModel = model.as_ref();
     let start = Instant::now();
+    let mut init_note = format!("{:?}", scene.init).to_lowercase();
     let init = match scene.init {
         InitMode::Newton => {
             let (mut v, z) = model.guess();
             if let Some(v0) = scene.v0 {
                 v = model.exact_start(v0).0;
+            }
+            let (v, z, stages) = start_in_omega(scene, model, v, z);
+            if stages > 0 {
+                init_note = format!("newton, from omega = {OMEGA_START} in {stages} stages");
             }
             Initialization::Newton { v, z }
         }
@@ -188,7 +240,7 @@ pub fn run(scene: &FrictionScene, out_dir: Option<&Path>, progress: bool) -> Res
         steps,
         order: scene.order,
         eps: scene.eps,
-        init: format!("{:?}", scene.init).to_lowercase(),
+        init: init_note,
         initial_residual: result.initial_residual,
         stats: result.stats,
         wall_s,

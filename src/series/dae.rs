@@ -435,6 +435,45 @@ impl<P: DaeProblem + ?Sized> Engine<'_, P> {
     }
 }
 
+impl<'p, P: DaeProblem + ?Sized> Engine<'p, P> {
+    /// An engine for series up to `order`, nothing loaded yet.
+    fn new(problem: &'p P, order: usize) -> Self {
+        let (nd, na) = (problem.n_diff(), problem.n_alg());
+        Engine {
+            problem,
+            tape: record_tape(problem, order),
+            nd,
+            na,
+            stats: Stats::default(),
+            tangents: Tangents::default(),
+            vz_cols: (nd..nd + nd + na).collect(),
+            lu: DenseLu::default(),
+            rhs: vec![0.0; nd + na],
+            loaded: Vec::new(),
+            tail: vec![vec![0.0; 2 * nd + na]; 4],
+            u_cols: (0..nd).collect(),
+            u_tangents: Tangents::default(),
+            f: Vec::new(),
+            dx: Vec::new(),
+            base: Vec::new(),
+        }
+    }
+}
+
+/// (v, z) consistent with u0 at t0 (F(u0, v, z, t0) = 0 within `tol`): the
+/// damped Newton that starts a run from [`Initialization::Newton`], alone,
+/// from the guess `vz` (v then z), which it overwrites; |F| at the end.
+/// `model::friction_run` continues it in omega where it fails.
+pub fn consistent<P: DaeProblem + ?Sized>(
+    problem: &P,
+    u0: &[f64],
+    vz: &mut [f64],
+    t0: f64,
+    tol: f64,
+) -> Result<f64> {
+    Engine::new(problem, 1).newton(u0, vz, t0, tol, 0)
+}
+
 /// Integrates from u0 at cfg.t0 to cfg.t_end. `on_step` receives every
 /// accepted step (for outputs; it keeps it if it wants, without a copy) and
 /// may stop the run with an error.
@@ -464,25 +503,7 @@ fn run_with<P: DaeProblem + ?Sized>(
     chooser: &mut implicit::Chooser,
 ) -> DaeResult {
     let nd = problem.n_diff();
-    let na = problem.n_alg();
-    let mut eng = Engine {
-        problem,
-        tape: record_tape(problem, cfg.order),
-        nd,
-        na,
-        stats: Stats::default(),
-        tangents: Tangents::default(),
-        vz_cols: (nd..nd + nd + na).collect(),
-        lu: DenseLu::default(),
-        rhs: vec![0.0; nd + na],
-        loaded: Vec::new(),
-        tail: vec![vec![0.0; 2 * nd + na]; 4],
-        u_cols: (0..nd).collect(),
-        u_tangents: Tangents::default(),
-        f: Vec::new(),
-        dx: Vec::new(),
-        base: Vec::new(),
-    };
+    let mut eng = Engine::new(problem, cfg.order);
     let finish = |stats: Stats, stop: &str, t: f64, error: Option<Error>, r0: f64| DaeResult {
         stats,
         stop: error

@@ -337,3 +337,26 @@ fn collapse_ahead_of_a_singular_point_is_named() {
     );
     assert_within_1e6_of_diffsol(&sc, &a, &label);
 }
+
+/// (i) The Newton initialization of a steep law: friction-plane at zeta =
+/// omega = 1e-2 N and q = 0.5 stalled at |F| = 2.0e-3 (a minimum of |F|
+/// that is not a root) and the run stopped before its first step; continued
+/// in omega from 1 (`model::friction_run`), it starts, ends at t = 3 s and
+/// is within 1e-6 of diffsol, which starts from its own initialization.
+#[test]
+fn steep_law_starts_by_continuation_in_omega() {
+    let edits = [
+        ("friction.zeta", "1e-2"),
+        ("friction.omega", "1e-2"),
+        ("friction.q", "0.5"),
+    ];
+    let sc = friction_scene("friction-plane.toml", &edits);
+    let a = anm_run(&sc, None, false).unwrap_or_else(|e| panic!("ANM failed: {e}"));
+    assert_eq!(a.stop.reason, "end", "{:?}", a.stop);
+    assert!(a.init.contains("omega"), "init: {}", a.init);
+    let label = format!(
+        "friction-plane q 0.5, zeta = omega = 1e-2: ANM ({})",
+        a.init
+    );
+    assert_within_1e6_of_diffsol(&sc, &a, &label);
+}
