@@ -568,10 +568,13 @@ fn run_with<P: DaeProblem + ?Sized>(
                 if let Some(d) = step.geometric {
                     if cfg.stop_at_singularity {
                         // The path got past it (singular_ahead): a pair of
-                        // complex singular points near the real axis, not
-                        // a breakdown. Not tested again up to there.
-                        regular_until = regular_until.max(t + PAST * d);
-                        eng.stats.singularities_passed += 1;
+                        // complex singular points near the real axis, or a
+                        // fast jump the steps resolve, not an end of the
+                        // path. Not tested again up to there.
+                        if t + d > regular_until {
+                            regular_until = t + PAST * d;
+                            eng.stats.singularities_passed += 1;
+                        }
                     } else {
                         events.push((t, t + d));
                     }
