@@ -58,9 +58,10 @@ const OMEGA_FACTOR: f64 = 3.0;
 /// omega = 1e-2, q = 0.5: |F| = 2.0e-3 after 100 iterations). From omega =
 /// `OMEGA_START`, where the law is smooth, each stage solves at omega /
 /// `OMEGA_FACTOR` from the last stage's root, down to the scene's omega;
-/// the run's own Newton then starts from that root. Returns the guess
-/// unchanged (0 stages) where Newton converges from it, or where a stage
-/// fails (the run then reports its own failure).
+/// the run's own Newton then starts from that root. Returns the root at
+/// the scene's omega (0 stages) where Newton converges from the guess, and
+/// the guess unchanged where a stage fails (the run then reports its own
+/// failure).
 fn start_in_omega(
     scene: &FrictionScene,
     model: &dyn FrictionModel,
@@ -72,8 +73,13 @@ fn start_in_omega(
     let solve = |m: &dyn FrictionModel, vz: &mut Vec<f64>| {
         dae::consistent(m, &u0, vz, 0.0, scene.newton_tol).is_ok()
     };
+    // Solved at the scene's omega: its root (the run's Newton, the same
+    // iteration, then stops at once).
     let mut vz = [v.clone(), z.clone()].concat();
-    if solve(model, &mut vz) || scene.friction.omega >= OMEGA_START {
+    if solve(model, &mut vz) {
+        return (vz[..nd].to_vec(), vz[nd..].to_vec(), 0);
+    }
+    if scene.friction.omega >= OMEGA_START {
         return (v, z, 0);
     }
     let mut vz = [v.clone(), z.clone()].concat();
