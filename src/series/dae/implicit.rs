@@ -24,7 +24,7 @@
 //! L-stable (R(z) → 0 as z → -∞), so a fast mode is damped whatever h |λ|.
 //! We take m = 5, n = 6 (order 11). (I2) is solved for u1 by a quasi-Newton
 //! iteration whose first matrix is that of the linear constant-coefficient
-//! case, M = sum_j γ(n, m, j) (-h A)^j with A = dv/du = -[J^-1 F_u]_v at the
+//! case, M = sum_j γ(n, m, j) (-h A)^j / j! with A = dv/du = -[J^-1 F_u]_v at the
 //! first iterate, then Broyden updates; each iteration costs a consistent
 //! initialization (Newton on F(u1, ., t1) = 0 from the linear prediction
 //! (v, z) + d(v, z)/du Δu1) and a series of order n at t1.
@@ -670,8 +670,13 @@ fn hermite_solve(
         .collect()
 }
 
-/// dG/du1 of (I2) [m/n] in the linear case y' = A y: sum_j γ(n, m, j) (-h A)^j
-/// (nd × nd, row-major), by Horner.
+/// dG/du1 of (I2) [m/n] in the linear case y' = A y, whose Taylor
+/// coefficients at t1 are u1_j = A^j u1 / j!: sum_j γ(n, m, j) (-h A)^j / j!
+/// (nd × nd, row-major), by Horner. (Without the 1/j! the fast direction's
+/// entry was n! = 720 times too large: the first quasi-Newton update of a
+/// stiff step moved u1 by about 1/720 of the way and the Broyden updates
+/// made up for it in 1–2 more iterations; and the error estimate
+/// M'^-1 G' was damped up to 6! = 720 times too much in the fast direction.)
 fn two_point_matrix(a: &[f64], nd: usize, h: f64, n: usize, m: usize) -> Vec<f64> {
     let mut mat = identity(nd);
     // Horner's partial products alternate between two matrices.
@@ -681,7 +686,7 @@ fn two_point_matrix(a: &[f64], nd: usize, h: f64, n: usize, m: usize) -> Vec<f64
         for i in 0..nd {
             next[i * nd + i] = 1.0;
         }
-        let c = -h * gamma(n, m, p) / gamma(n, m, p - 1);
+        let c = -h * gamma(n, m, p) / (gamma(n, m, p - 1) * p as f64);
         for i in 0..nd {
             for j in 0..nd {
                 let acc: f64 = (0..nd).map(|k| a[i * nd + k] * mat[k * nd + j]).sum();
@@ -785,6 +790,48 @@ mod tests {
         assert!((r(z) - z.exp()).abs() < 1e-13, "{} vs {}", r(z), z.exp());
         // L-stable: |R(z)| -> 0 as z -> -inf (degree m < n).
         assert!(r(-1e8).abs() < 1e-7);
+    }
+
+    #[test]
+    fn two_point_matrix_is_the_jacobian_of_the_linear_case() {
+        // y' = A y: u1_j = A^j u1 / j!, so dG/du1 = sum_j γ(n, m, j) (-h A)^j / j!,
+        // summed here from explicit powers of a non-normal 2 × 2 A.
+        let (m, n, h) = (5usize, 6usize, 0.7f64);
+        let a = [-3.0, 1.5, 0.25, -40.0];
+        let mul = |x: &[f64], y: &[f64]| -> Vec<f64> {
+            (0..4)
+                .map(|k| (0..2).map(|l| x[(k / 2) * 2 + l] * y[l * 2 + k % 2]).sum())
+                .collect()
+        };
+        let mut power = identity(2);
+        let mut want = vec![0.0; 4];
+        let mut fact = 1.0;
+        for j in 0..=n {
+            if j > 0 {
+                power = mul(&power, &a);
+                fact *= j as f64;
+            }
+            let w = gamma(n, m, j) * (-h).powi(j as i32) / fact;
+            for (x, p) in want.iter_mut().zip(&power) {
+                *x += w * p;
+            }
+        }
+        let got = two_point_matrix(&a, 2, h, n, m);
+        for (g, w) in got.iter().zip(&want) {
+            assert!(
+                (g - w).abs() <= 1e-12 * w.abs().max(1.0),
+                "{got:?} vs {want:?}"
+            );
+        }
+        // The scalar case is the denominator Q_n(-z) of the Padé approximant.
+        let z: f64 = -30.0;
+        let q: f64 = (0..=n)
+            .map(|j| {
+                gamma(n, m, j) * (-z).powi(j as i32) / (1..=j).map(|x| x as f64).product::<f64>()
+            })
+            .sum();
+        let got = two_point_matrix(&[z], 1, 1.0, n, m)[0];
+        assert!((got - q).abs() <= 1e-12 * q.abs(), "{got} vs {q}");
     }
 
     #[test]
