@@ -360,3 +360,30 @@ fn steep_law_starts_by_continuation_in_omega() {
     );
     assert_within_1e6_of_diffsol(&sc, &a, &label);
 }
+
+/// (i) A Newton at the rounding floor of the law: friction-roller at zeta =
+/// 1e-2 N, omega = 1e-6, where the correction of a step end stalled at
+/// |F| = 1.09e-11 with its update at round-off (1.2e-16) against 1e3 times
+/// the 1e-14 tolerance, and the run stopped at t = 1.976 s ("no
+/// convergence"). Rounding (v, z) alone leaves | |J| eps |(v, z)| | =
+/// 4.2e-11 there, so no (v, z) in floating point does better: the Newton now
+/// stops there, and the run reaches the roller's breakdown within 1e-6 of
+/// diffsol.
+#[test]
+fn newton_at_the_rounding_floor_is_converged() {
+    let sc = friction_scene(
+        "friction-roller.toml",
+        &[("friction.zeta", "1e-2"), ("friction.omega", "1e-6")],
+    );
+    let a = anm_run(&sc, None, false).unwrap_or_else(|e| panic!("ANM failed: {e}"));
+    assert_eq!(a.stop.reason, "singularity", "{:?}", a.stop);
+    let t = a.stop.t.expect("stop time");
+    assert!(t > 2.2, "stopped at t = {t} s, before the breakdown");
+    let b = diffsol(&sc, DiffsolMethod::Bdf, 1e-10);
+    let errs = column_errors(&a.columns, &a.history, &b.history, 2.25, &["ux", "uy"]);
+    crate::common::print_table("roller zeta = 1e-2, omega = 1e-6 vs diffsol", &errs);
+    assert!(
+        errs.iter().all(|(_, e)| *e <= 1e-6),
+        "columns above 1e-6: {errs:?}"
+    );
+}
