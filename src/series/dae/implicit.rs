@@ -27,16 +27,21 @@
 //! case, M = sum_j γ(n, m, j) (-h A)^j / j! with A = dv/du = -[J^-1 F_u]_v at the
 //! first iterate, then Broyden updates; each iteration costs a consistent
 //! initialization (Newton on F(u1, ., t1) = 0 from the linear prediction
-//! (v, z) + d(v, z)/du Δu1) and a series of order n at t1.
+//! (v, z) + d(v, z)/du Δu1) and a series of order n at t1. It starts from
+//! the series at t0 summed to its smallest term, moved onto the slow
+//! manifold in the stiff directions ([`onto_slow_manifold`]).
 //!
-//! Error and step length: the last term of the left side of (I2),
-//! γ(n, m, n) |u1_n| h^n, against eps max(|u1_1| h, |u1|) (eps of the
-//! explicit ratio rule; |u1| when u barely moves), on the differential
-//! unknowns only: the algebraic ones are solved consistently at t1 (as IDA's
-//! suppress-alg, docs/reference-solvers.md). Next h ∝ ratio^(-1/n), within
-//! [0.2, 4]. On a fast mode this term is about the fast amplitude at t0
-//! (u1 carries d0 R(λh)), small on the manifold, so h follows the slow
-//! solution.
+//! Error and step length: u1 against the [m-1/n] formula (order m + n - 1,
+//! also L-stable), |M'^-1 G'(u1)| with M' its matrix of the linear case,
+//! against eps max(|u1_1| h, |u1|) (eps of the explicit ratio rule; |u1|
+//! when u barely moves), on the differential unknowns; the algebraic ones
+//! are solved consistently at t1 (as IDA's suppress-alg,
+//! docs/reference-solvers.md) and their own formula defects count where
+//! their fast content is small; the fast amplitude left at t1 counts too.
+//! Next h = h clamp(0.9 ratio^(-1/(m+n)), 0.2, 2), capped by Gustafsson's
+//! predictive controller ([`Chooser::growth`]). On a fast mode the defect
+//! is about the fast amplitude at t0 (u1 carries d0 R(λh)), small on the
+//! manifold, so h follows the slow solution.
 //!
 //! Dense output: the caller's output times inside the step
 //! (`DaeConfig::output_times`) are solved by (I2) from t0 (started from the
