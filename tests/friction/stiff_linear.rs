@@ -50,8 +50,17 @@ fn exact(tau: f64, t: f64) -> f64 {
     (t.sin() - tau * t.cos() + tau * (-t / tau).exp()) / (1.0 + tau * tau)
 }
 
-/// Steps and the largest error (step ends and a grid of 301 points).
-fn solve(tau: f64, stepping: Stepping, max_steps: usize) -> (usize, f64, String) {
+/// Runs `problem` from (u0, v0) at t = 0 to 3 s (order 20, eps 1e-10,
+/// outputs every 0.01 s) and returns the result, its steps and the largest
+/// error against `exact` over the step ends and the 301 output points.
+fn run_against<P: DaeProblem>(
+    problem: &P,
+    u0: &[f64],
+    v0: Vec<f64>,
+    stepping: Stepping,
+    max_steps: usize,
+    exact: impl Fn(f64) -> Vec<f64>,
+) -> (dae::DaeResult, Vec<dae::TimeStep>, f64) {
     let cfg = DaeConfig {
         order: 20,
         eps: 1e-10,
@@ -66,33 +75,48 @@ fn solve(tau: f64, stepping: Stepping, max_steps: usize) -> (usize, f64, String)
         stepping,
         output_times: (0..=300).map(|i| 0.01 * i as f64).collect(),
     };
-    let mut worst: f64 = 0.0;
     let mut steps = Vec::new();
     let r = dae::run(
-        &Relaxation { tau },
-        &[0.0],
-        &Initialization::Exact {
-            v: vec![0.0],
-            z: vec![],
-        },
+        problem,
+        u0,
+        &Initialization::Exact { v: v0, z: vec![] },
         &cfg,
         |step, _| {
             steps.push(step);
             Ok(())
         },
     );
+    let mut worst: f64 = 0.0;
+    let mut check = |t: f64, y: &[f64]| {
+        for (yi, ei) in y.iter().zip(exact(t)) {
+            assert!(yi.is_finite(), "non-finite at t = {t}");
+            worst = worst.max((yi - ei).abs());
+        }
+    };
     for s in &steps {
         let t1 = s.t0 + s.length;
-        worst = worst.max((s.eval(t1)[0] - exact(tau, t1)).abs());
+        check(t1, &s.eval(t1));
     }
     for i in 0..=300 {
         let t = 0.01 * i as f64;
         if let Some(s) = steps.iter().find(|s| t <= s.t0 + s.length + 1e-14) {
-            let y = s.eval(t.max(s.t0))[0];
-            assert!(y.is_finite(), "tau {tau:e}: non-finite at t = {t}");
-            worst = worst.max((y - exact(tau, t)).abs());
+            check(t, &s.eval(t.max(s.t0)));
         }
     }
+    (r, steps, worst)
+}
+
+/// Steps and the largest error (step ends and a grid of 301 points).
+fn solve(tau: f64, stepping: Stepping, max_steps: usize) -> (usize, f64, String) {
+    // u'(0) = (0 - sin 0)/tau = 0: the exact initial velocity.
+    let (r, _, worst) = run_against(
+        &Relaxation { tau },
+        &[0.0],
+        vec![0.0],
+        stepping,
+        max_steps,
+        |t| vec![exact(tau, t)],
+    );
     (r.stats.steps, worst, r.stop)
 }
 
@@ -105,7 +129,6 @@ fn implicit_step_follows_the_closed_form_with_steps_independent_of_tau() {
         println!("explicit: tau = {tau:.0e}: {steps} steps, max error {err:.2e}");
         explicit.push(steps);
     }
-    // u'(0) = (0 - sin 0)/tau = 0: the exact initial velocity.
     for stepping in [Stepping::Auto, Stepping::Implicit] {
         let mut counts = vec![];
         for tau in [1e-2, 1e-3, 1e-4, 1e-5, 1e-6] {
@@ -223,51 +246,16 @@ fn implicit_step_with_two_coupled_modes_follows_the_closed_form() {
         let mut counts = vec![];
         for tau in [1e-3, 1e-4, 1e-5, 1e-6] {
             let p = Coupled { tau, c: 0.5 };
-            let cfg = DaeConfig {
-                order: 20,
-                eps: 1e-10,
-                t0: 0.0,
-                t_end: 3.0,
-                max_steps: 20_000,
-                newton_tol: 1e-14,
-                correct: true,
-                residual_tol: 1e-8,
-                min_step: 1e-15,
-                stop_at_singularity: false,
-                stepping,
-                output_times: (0..=300).map(|i| 0.01 * i as f64).collect(),
-            };
-            let mut steps = Vec::new();
             // v(0) = A w(0) + g'(0) = (c + 1, -1).
-            let r = dae::run(
+            let (r, steps, worst) = run_against(
                 &p,
                 &[0.0, 2.0],
-                &Initialization::Exact {
-                    v: vec![p.c + 1.0, -1.0],
-                    z: vec![],
-                },
-                &cfg,
-                |step, _| {
-                    steps.push(step);
-                    Ok(())
-                },
+                vec![p.c + 1.0, -1.0],
+                stepping,
+                20_000,
+                |t| coupled_exact(&p, t).to_vec(),
             );
             assert_eq!(r.stop, "end", "tau {tau:e}: {r:?}");
-            let mut worst: f64 = 0.0;
-            let mut check = |t: f64, y: &[f64]| {
-                let e = coupled_exact(&p, t);
-                worst = worst.max((y[0] - e[0]).abs()).max((y[1] - e[1]).abs());
-            };
-            for s in &steps {
-                let t1 = s.t0 + s.length;
-                check(t1, &s.eval(t1));
-            }
-            for i in 0..=300 {
-                let t = 0.01 * i as f64;
-                if let Some(s) = steps.iter().find(|s| t <= s.t0 + s.length + 1e-14) {
-                    check(t, &s.eval(t.max(s.t0)));
-                }
-            }
             println!(
                 "{}: tau = {tau:.0e}: {} steps ({} implicit), max error {worst:.2e}",
                 stepping.name(),
