@@ -544,8 +544,8 @@ fn attempt<P: DaeProblem + ?Sized>(
     }
     onto_slow_manifold(eng, &mut u1, &mut vz1, t1, h, cfg.newton_tol, index);
     let mut mat = vec![0.0; nd * nd];
-    // The first matrix (of the linear case), kept for G's round-off floor.
-    let mut lin = vec![0.0; nd * nd];
+    // |M| of the linear case (the first matrix), for G's round-off floor.
+    let mut lin_norm = 0.0;
     let mut dvz = Vec::new();
     // A = dv/du at the first iterate.
     let mut a: Vec<f64> = Vec::new();
@@ -555,6 +555,8 @@ fn attempt<P: DaeProblem + ?Sized>(
     let mut s = Vec::new();
     let mut r = vec![0.0; nd];
     let mut scratch = vec![0.0; nd];
+    // The next update, computed before the convergence test.
+    let mut next = vec![0.0; nd];
     for _ in 0..MAX_ITERATIONS {
         eng.newton(&u1, &mut vz1, t1, cfg.newton_tol, index)?;
         solve_series(eng, &u1, &vz1, t1, index, n)?;
@@ -590,7 +592,7 @@ fn attempt<P: DaeProblem + ?Sized>(
             let (a1, d) = ode_jacobian(eng);
             dvz = d;
             mat = two_point_matrix(&a1, nd, h, n, m);
-            lin.clone_from(&mat);
+            lin_norm = row_sum_norm(&mat, nd);
             a = a1;
         }
         let mut converged = norm(&r) <= tol || stalled;
@@ -598,7 +600,7 @@ fn attempt<P: DaeProblem + ?Sized>(
         // the test at an output time: one that would move u1 by round-off
         // only ends the iteration here, at the point whose series is at
         // hand, instead of after one more series to see the stall.
-        let mut pending = None;
+        let mut pending = false;
         if !converged {
             if !r.iter().all(|x| x.is_finite()) {
                 break;
@@ -607,18 +609,20 @@ fn attempt<P: DaeProblem + ?Sized>(
                 broyden(&mut mat, du, &r, r_old, nd);
             }
             lu.factorize(nd, |i, j| mat[i * nd + j]);
-            let mut du: Vec<f64> = r.iter().map(|x| -x).collect();
-            if !lu.solve_in_place(&mut du) || !du.iter().all(|x| x.is_finite()) {
+            for (d, x) in next.iter_mut().zip(&r) {
+                *d = -x;
+            }
+            if !lu.solve_in_place(&mut next) || !next.iter().all(|x| x.is_finite()) {
                 break;
             }
             // ... and only where G itself is at its round-off floor,
             // ε |u1| |M| (M that of the linear case): a quasi-Newton update
             // can vanish at a point off the root.
-            let floor = 16.0 * f64::EPSILON * norm(&u1) * row_sum_norm(&lin, nd);
+            let round_off = f64::EPSILON * norm(&u1);
             converged = target == Target::OutputTime
-                && norm(&du) <= 4.0 * f64::EPSILON * norm(&u1)
-                && norm(&r) <= floor.max(tol);
-            pending = Some(du);
+                && norm(&next) <= 4.0 * round_off
+                && norm(&r) <= (16.0 * round_off * lin_norm).max(tol);
+            pending = true;
         }
         if converged {
             // Local error: u1 against the [m-1/n] formula (order m + n - 1,
@@ -667,7 +671,7 @@ fn attempt<P: DaeProblem + ?Sized>(
             let uncertainty = last
                 .as_ref()
                 .map_or(0.0, |(du, _)| norm(du))
-                .max(pending.as_deref().map_or(0.0, norm))
+                .max(if pending { norm(&next) } else { 0.0 })
                 .max(f64::EPSILON * norm(&u1));
             for k in 0..s.len() - nd {
                 let y = &s[nd + k];
@@ -688,7 +692,7 @@ fn attempt<P: DaeProblem + ?Sized>(
         }
         // Δu and G of this iterate into the previous one's vectors.
         let (du, r_old) = last.get_or_insert_with(|| (vec![0.0; nd], vec![0.0; nd]));
-        du.copy_from_slice(&pending.expect("computed when not converged"));
+        du.copy_from_slice(&next);
         for i in 0..nd {
             u1[i] += du[i];
         }
