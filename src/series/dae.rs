@@ -604,8 +604,7 @@ fn run_with<P: DaeProblem + ?Sized>(
                     }
                 }
                 eng.stats.steps += 1;
-                let y = step.eval(step.t0 + step.length);
-                if y.iter().any(|x| !x.is_finite()) {
+                let Some(end) = step_end(&step, nd, cfg.t_end, &mut u, &mut vz) else {
                     let e = Error::NonFinite {
                         step: index,
                         param: "t",
@@ -613,14 +612,8 @@ fn run_with<P: DaeProblem + ?Sized>(
                         what: "series evaluation".into(),
                     };
                     return finish(eng.stats, "", t, Some(e), r0);
-                }
-                t = if step.t0 + step.length >= cfg.t_end {
-                    cfg.t_end
-                } else {
-                    step.t0 + step.length
                 };
-                u.copy_from_slice(&y[..nd]);
-                vz.copy_from_slice(&y[nd..]);
+                t = end;
                 let end_residual = step.end_residual;
                 if let Err(e) = on_step(step, &eng.stats) {
                     return finish(eng.stats, "", t, Some(e), r0);
@@ -683,12 +676,12 @@ fn singular_ahead<P: DaeProblem + ?Sized>(
     index: usize,
     cfg: &DaeConfig,
 ) -> Ahead {
-    let nd = eng.nd;
     let mut ch = chooser.clone();
     let (t_star, past) = (step.t0 + d, (step.t0 + PAST * d).min(cfg.t_end));
-    let mut t = (step.t0 + step.length).min(cfg.t_end);
-    let y = step.eval(t);
-    let (mut u, mut vz) = (y[..nd].to_vec(), y[nd..].to_vec());
+    let (mut u, mut vz) = (Vec::new(), Vec::new());
+    let Some(mut t) = step_end(step, eng.nd, cfg.t_end, &mut u, &mut vz) else {
+        return Ahead::Singular;
+    };
     let mut end_residual = step.end_residual;
     let mut same = 0;
     for k in 1..=LOOKAHEAD_STEPS {
@@ -718,16 +711,34 @@ fn singular_ahead<P: DaeProblem + ?Sized>(
         if same >= CONFIRMATIONS {
             return Ahead::Singular;
         }
-        t = (next.t0 + next.length).min(cfg.t_end);
-        let y = next.eval(t);
-        if y.iter().any(|x| !x.is_finite()) {
+        let Some(end) = step_end(&next, eng.nd, cfg.t_end, &mut u, &mut vz) else {
             return Ahead::Singular;
-        }
-        u.copy_from_slice(&y[..nd]);
-        vz.copy_from_slice(&y[nd..]);
+        };
+        t = end;
         end_residual = next.end_residual;
     }
     Ahead::Singular
+}
+
+/// Moves (u, vz) (nd differential unknowns, the others) to the end of
+/// `step` and returns its time (at most t_end); None where the series are
+/// not finite there.
+fn step_end(
+    step: &TimeStep,
+    nd: usize,
+    t_end: f64,
+    u: &mut Vec<f64>,
+    vz: &mut Vec<f64>,
+) -> Option<f64> {
+    let y = step.eval(step.t0 + step.length);
+    if y.iter().any(|x| !x.is_finite()) {
+        return None;
+    }
+    u.clear();
+    u.extend_from_slice(&y[..nd]);
+    vz.clear();
+    vz.extend_from_slice(&y[nd..]);
+    Some((step.t0 + step.length).min(t_end))
 }
 
 /// What [`singular_ahead`] found.
