@@ -50,12 +50,7 @@ fn main() {
             let t = Instant::now();
             let mut series: Vec<ElementSeries> = elements
                 .iter()
-                .enumerate()
-                .map(|(i, e)| {
-                    // At x: element i's reference translated back by its shift.
-                    let v = [Vec3::new(-0.1 * i as f64, 0.0, 0.0); 4];
-                    ElementSeries::start(e, &x, &d, &v, &[Vec3::zeros(); 4])
-                })
+                .map(|e| ElementSeries::start(e, &x, &d))
                 .collect();
             t_start += t.elapsed().as_secs_f64();
             let t = Instant::now();

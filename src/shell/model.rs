@@ -372,16 +372,16 @@ impl ShellModel {
     /// (force on v, then on w), in the element's node order.
     pub fn element_internal(&self, e: usize, full: &[f64]) -> [f64; 24] {
         let el = &self.elements[e];
-        let (v, w) = self.element_state(el, full, true);
-        el.internal(&v, &w)
+        let (x, d) = self.element_state(el, full, false);
+        el.internal(&x, &d)
     }
 
     /// Membrane force resultant of element `e` at the full state
     /// ([`ShellElement::membrane_resultant`], force per unit length).
     pub fn membrane_resultant(&self, e: usize, full: &[f64]) -> nalgebra::Matrix3<f64> {
         let el = &self.elements[e];
-        let (v, w) = self.element_state(el, full, true);
-        el.membrane_resultant(&v, &w)
+        let (x, d) = self.element_state(el, full, false);
+        el.membrane_resultant(&x, &d)
     }
 
     fn vec3(full: &[f64], node: usize, off: usize) -> Vec3 {
@@ -512,8 +512,8 @@ impl ShellModel {
                 .zip(elements)
                 .for_each(|((out, kg_out), chunk)| {
                     for ((f, kg), e) in out.iter_mut().zip(kg_out).zip(chunk) {
-                        let (v, w) = self.element_state(e, full, true);
-                        (*f, *kg) = e.internal_and_geometric(&v, &w);
+                        let (x, d) = self.element_state(e, full, false);
+                        (*f, *kg) = e.internal_and_geometric(&x, &d);
                     }
                 });
         } else {
@@ -522,8 +522,8 @@ impl ShellModel {
                 .zip(elements)
                 .for_each(|(out, chunk)| {
                     for (f, e) in out.iter_mut().zip(chunk) {
-                        let (v, w) = self.element_state(e, full, true);
-                        *f = e.internal(&v, &w);
+                        let (x, d) = self.element_state(e, full, false);
+                        *f = e.internal(&x, &d);
                     }
                 });
         }
@@ -772,10 +772,7 @@ impl ShellModel {
                     let (x, d) = self.element_state(e, &full, false);
                     match kept {
                         Some(kg) => st.restart_with(&x, &d, kg[i]),
-                        None => {
-                            let (v, w) = self.element_state(e, &full, true);
-                            st.restart(e, &x, &d, &v, &w)
-                        }
+                        None => st.restart(e, &x, &d),
                     }
                     st.reserve(self.orders);
                 });
@@ -787,8 +784,7 @@ impl ShellModel {
                 .with_min_len(PAR_MIN)
                 .map(|e| {
                     let (x, d) = self.element_state(e, &full, false);
-                    let (v, w) = self.element_state(e, &full, true);
-                    let mut st = ElementSeries::start(e, &x, &d, &v, &w);
+                    let mut st = ElementSeries::start(e, &x, &d);
                     st.reserve(self.orders);
                     st
                 })

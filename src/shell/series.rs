@@ -104,22 +104,15 @@ fn add_product(y: &NodalVectors, kg: &PackedSym, f: &mut NodalVectors) {
 }
 
 impl ElementSeries {
-    /// Order 0 at the state (x0, d0) (positions and directors), reached
-    /// from the reference by (v0, w0) (ShellElement::state_geometric).
-    pub fn start(
-        e: &ShellElement,
-        x0: &[Vec3; 4],
-        d0: &[Vec3; 4],
-        v0: &[Vec3; 4],
-        w0: &[Vec3; 4],
-    ) -> Self {
+    /// Order 0 at the state (x0, d0).
+    pub fn start(e: &ShellElement, x0: &[Vec3; 4], d0: &[Vec3; 4]) -> Self {
         let mut series = Self {
             y: vec![],
             kg: vec![],
             kg_star: None,
             ahead: None,
         };
-        series.restart(e, x0, d0, v0, w0);
+        series.restart(e, x0, d0);
         series
     }
 
@@ -130,16 +123,9 @@ impl ElementSeries {
         self.kg.reserve(more);
     }
 
-    /// [`ElementSeries::start`] in the buffers of an earlier series.
-    pub fn restart(
-        &mut self,
-        e: &ShellElement,
-        x0: &[Vec3; 4],
-        d0: &[Vec3; 4],
-        v0: &[Vec3; 4],
-        w0: &[Vec3; 4],
-    ) {
-        self.restart_with(x0, d0, pack(&e.state_geometric(v0, w0)));
+    /// Order 0 at the state (x0, d0), in the buffers of an earlier series.
+    pub fn restart(&mut self, e: &ShellElement, x0: &[Vec3; 4], d0: &[Vec3; 4]) {
+        self.restart_with(x0, d0, pack(&e.state_geometric(x0, d0)));
     }
 
     /// [`ElementSeries::restart`] with Kg_0 = Kg(σ(x0, d0)) given (from
@@ -362,11 +348,10 @@ mod tests {
             std::array::from_fn(|i| x0[i] + v0[i]),
             std::array::from_fn(|i| d0[i] + w0[i]),
         );
-        // The displacements from the element's reference along the path.
         let at = |a: f64| -> ([Vec3; 4], [Vec3; 4]) {
             (
-                std::array::from_fn(|i| v0[i] + ys[0].0[i] * a + ys[1].0[i] * a * a),
-                std::array::from_fn(|i| w0[i] + ys[0].1[i] * a + ys[1].1[i] * a * a),
+                std::array::from_fn(|i| xs0[i] + ys[0].0[i] * a + ys[1].0[i] * a * a),
+                std::array::from_fn(|i| ds0[i] + ys[0].1[i] * a + ys[1].1[i] * a * a),
             )
         };
         // Coefficients by interpolation at a = -3..3.
@@ -376,14 +361,14 @@ mod tests {
         let forces: Vec<[f64; NDOF_EL]> = nodes
             .iter()
             .map(|&a| {
-                let (v, w) = at(a);
-                e.internal(&v, &w)
+                let (x, d) = at(a);
+                e.internal(&x, &d)
             })
             .collect();
         let coeff = |p: usize| -> SVector<f64, NDOF_EL> {
             SVector::from_fn(|k, _| (0..7).map(|j| vinv[(p, j)] * forces[j][k]).sum())
         };
-        let mut st = ElementSeries::start(&e, &xs0, &ds0, &v0, &w0);
+        let mut st = ElementSeries::start(&e, &xs0, &ds0);
         let kt = st.tangent(&e, &mut FullMapCache::default());
         let q = |p: usize| -> SVector<f64, NDOF_EL> {
             if p > 2 {
