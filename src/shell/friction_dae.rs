@@ -395,6 +395,25 @@ impl FrictionDae {
         out
     }
 
+    /// The friction node whose residual force is the largest multiple of
+    /// its friction cap f |R_N|_reg, and that multiple, for the residual
+    /// `r` of [`FrictionDae::residual`] (its tapes at the same state).
+    /// Above 1, no slip velocity balances that node with its tangential
+    /// position held: the state is off the DAE's solution set.
+    pub fn worst_cap_ratio(&self, r: &[f64]) -> Option<(usize, f64)> {
+        let law = &self.laws.law;
+        self.pairs
+            .iter()
+            .zip(&self.node_dofs)
+            .map(|(fp, dofs)| {
+                let force = dofs.iter().map(|&k| r[k] * r[k]).sum::<f64>().sqrt();
+                let cap = law.f * law.normal_magnitude(fp.tape.output(friction_pair::RN, 0));
+                (fp.node, force / cap)
+            })
+            .filter(|(_, q)| q.is_finite())
+            .max_by(|a, b| a.1.total_cmp(&b.1))
+    }
+
     /// Free dofs of friction pair i's translations.
     pub fn pair_dofs(&self, i: usize) -> [usize; 3] {
         self.node_dofs[i]

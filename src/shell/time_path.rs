@@ -553,11 +553,23 @@ fn run_implicit(
                 stats.max_residual = stats.max_residual.max(rel);
             }
             if length < cfg.min_step {
+                // Whether the start itself is off the solution set: a
+                // friction node loaded beyond its cap (README, "Stiffness
+                // in time", item 4: the conveying strip at small zeta and
+                // omega).
+                let r = dae.residual(&s)?;
+                let infeasible = match dae.worst_cap_ratio(&r) {
+                    Some((node, q)) if q > 1.0 => format!(
+                        "; at the step start node {} carries a residual force {q:.2} times its friction cap f |R_N|_reg, which no slip velocity balances (a larger friction.zeta or friction.omega may run)",
+                        node + 1
+                    ),
+                    _ => String::new(),
+                };
                 return Err(Error::TimeSteps {
                     param: "t",
                     at: s.t,
                     what: format!(
-                        "implicit step length collapsed to {length:.3e} s after {} steps: {diagnosis}; node {} carries the largest error estimate: the quasi-static solution may cease to exist here (e.g. a pull above what friction can hold)",
+                        "implicit step length collapsed to {length:.3e} s after {} steps: {diagnosis}; node {} carries the largest error estimate: the quasi-static solution may cease to exist here (e.g. a pull above what friction can hold){infeasible}",
                         stats.steps,
                         node_of_dof(dae, last_dof) + 1
                     ),
