@@ -557,8 +557,10 @@ fn run_implicit(
                 // friction node loaded beyond its cap (README, "Stiffness
                 // in time", item 4: the conveying strip at small zeta and
                 // omega).
-                let r = dae.residual(&s)?;
-                let infeasible = match dae.worst_cap_ratio(&r) {
+                // (A residual that fails here leaves the collapse's own
+                // diagnosis, not its error.)
+                let worst = dae.residual(&s).ok().and_then(|r| dae.worst_cap_ratio(&r));
+                let infeasible = match worst {
                     Some((node, q)) if q > 1.0 => format!(
                         "; at the step start node {} carries a residual force {q:.2} times its friction cap f |R_N|_reg, which no slip velocity balances (a larger friction.zeta or friction.omega may run)",
                         node + 1
