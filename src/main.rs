@@ -785,12 +785,13 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
                         let r = anm::run::shell_time::run_with(&sc, Some(&out), !quiet)
                             .with_context(|| format!("running {}", scene.display()))?;
                         println!(
-                            "{}: stop = {} at t = {:.6} s; {} steps ({} implicit, time_step = {}), {} factorizations, {} corrections, {:.3} s; {} friction nodes; outputs in {}",
+                            "{}: stop = {} at t = {:.6} s; {} steps ({} implicit, {} of them fully implicit; time_step = {}), {} factorizations, {} corrections, {:.3} s; {} friction nodes; outputs in {}",
                             scene.display(),
                             r.stop,
                             r.stop_t,
                             r.steps,
                             r.implicit_steps,
+                            r.newton_steps,
                             r.time_step,
                             r.factorizations,
                             r.corrections,

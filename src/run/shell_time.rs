@@ -48,6 +48,8 @@ pub struct TimeReport {
     /// `solver.time_step` and the steps taken by the implicit step.
     pub time_step: String,
     pub implicit_steps: usize,
+    /// Of those, the steps by the fully implicit (Newton) stages.
+    pub newton_steps: usize,
     /// Implicit trials rejected (error test or end residual).
     pub rejected: usize,
     pub factorizations: usize,
@@ -365,6 +367,7 @@ pub fn run_with(scene: &ShellScene, out_dir: Option<&Path>, progress: bool) -> R
             .map_or("explicit", |f| f.stepping.name())
             .to_string(),
         implicit_steps: run.stats.implicit,
+        newton_steps: run.stats.newton,
         rejected: run.stats.rejected,
         factorizations: run.stats.factorizations,
         corrections: run.stats.corrections,

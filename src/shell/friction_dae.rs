@@ -317,6 +317,32 @@ impl FrictionDae {
         Ok(())
     }
 
+    /// Re-linearizes at `s` for a Newton iteration of a fully implicit
+    /// stage ([`super::implicit_step::newton_trial`]) and factorizes
+    /// M/(h γ) − J there with `hg` = h γ, keeping the charts of the last
+    /// [`FrictionDae::prepare`] (the stage's z is measured in them). False,
+    /// with nothing factorized, where the set of friction pairs changed
+    /// (the contact search moved a pair in or out: the step must be
+    /// shorter).
+    pub fn relinearize_in_charts(&mut self, s: &TimeState, hg: f64) -> Result<bool> {
+        let pairs: Vec<usize> = self.pairs.iter().map(|p| p.pair).collect();
+        let charts = std::mem::take(&mut self.charts);
+        self.prepare(s)?;
+        if self.pairs.iter().map(|p| p.pair).ne(pairs.iter().copied()) {
+            return Ok(false);
+        }
+        let xs = self.pair_positions(&s.u, s.t);
+        self.chart_start = charts
+            .iter()
+            .zip(&xs)
+            .zip(&pairs)
+            .map(|((c, x), &ip)| c.eval(x, s.w[ip]))
+            .collect();
+        self.charts = charts;
+        self.factor_rows(Some(hg), s.t)?;
+        Ok(true)
+    }
+
     /// Refactorizes the last linearization for an implicit step of
     /// M/(h γ) − J with `hg` = h γ.
     pub fn factor_implicit(&mut self, hg: f64, t: f64) -> Result<()> {

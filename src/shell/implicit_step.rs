@@ -31,6 +31,17 @@
 //! (second block scaled by the kinematic row scale): the series' matrix
 //! with h γ terms, so the step reuses its assembly.
 //!
+//! A Rosenbrock step linearizes the law once, at the step start. In
+//! saturated slip at small ω and ζ that is not enough: its stages leave a
+//! friction node off its slow manifold by an amount ∝ h, loaded several
+//! times beyond its friction cap f |R_N|_reg, and the step collapses
+//! (the conveying strip at ζ = ω = 1e-4 N: t = 3.1e-8 s on the coarse
+//! mesh). Where trials keep failing, [`newton_trial`] takes the step as
+//! backward Euler solved by Newton, re-linearized at every iterate: the
+//! iterates may move those nodes along their obstacle as far as the
+//! equilibrium needs (measured there: 4–30 iterations, the slipping
+//! region growing by a node or two per iteration).
+//!
 //! The error estimate (k_6) is measured on the translations of the friction
 //! nodes only, whose tangential parts are the differential unknowns (their
 //! normal parts, on the stiff contact law, stay in the test: without them a
@@ -50,7 +61,7 @@
 
 use super::friction_dae::{FrictionDae, TimeState};
 use crate::error::Result;
-use crate::series::rodas::{RODAS4, STAGES};
+use crate::series::rodas::{ERROR_ORDER, RODAS4, STAGES};
 
 /// One attempted step.
 pub struct Trial {
@@ -59,6 +70,8 @@ pub struct Trial {
     pub error: f64,
     /// A free dof of the node with the largest error.
     pub worst_dof: usize,
+    /// The order in h of the error estimate (the step rule's exponent).
+    pub error_order: f64,
 }
 
 /// Attempts a step of length h from s; the DAE must be prepared at s
@@ -143,6 +156,7 @@ pub fn trial(dae: &mut FrictionDae, s: &TimeState, h: f64) -> Result<Trial> {
         },
         error: worst,
         worst_dof,
+        error_order: ERROR_ORDER,
     })
 }
 
@@ -219,4 +233,192 @@ pub fn settle(
         rel = rel_next;
     }
     Ok(rel)
+}
+
+/// Newton iterations of [`newton_trial`].
+const NEWTON_ITERATIONS: usize = 30;
+
+/// A fully implicit (backward Euler) step of length h from the consistent
+/// state s, solved by damped Newton re-linearized at every iterate:
+///
+///   E(U_1, w_1, t + h) = 0,   C(x(U_1)) − z_0 − h D(x_1) w_1 = 0,
+///
+/// so that the step end satisfies the equilibrium to `tol` (relative to
+/// the force scale) and the kinematics to `kin_tol` (m). The step loop's
+/// fallback where the Rosenbrock stages keep failing: in saturated slip
+/// they leave a friction node off its slow manifold by an amount ∝ h (a
+/// force several times its friction cap; README, "Stiffness in time",
+/// item 4), which Newton moves back.
+///
+/// Why one stage: a second, as in a two-stage SDIRK (Alexander's, order 2,
+/// tried), starts from z_0 + (1 − γ)/γ (z_1 − z_0), 2.4 times the first
+/// stage's relaxation, so the slip of every relaxing node reverses between
+/// the stages and its Newton must cross the law's steep part at each of
+/// them (measured: on scenes/strip-conveying.toml at ζ = ω = 1e-4 N its
+/// second stage stalled at t = 4.05e-7 s, a node at 2.3 times its cap).
+///
+/// Error estimate (variable-step BDF1, as DASSL's): h / (h + h_prev) times
+/// the distance of the end from the linear predictor through the previous
+/// step's start `prev` = (U, h_prev), on the friction nodes' tangential
+/// coordinates; without a previous step, half the step's increment.
+/// None where Newton did not converge.
+pub fn newton_trial(
+    dae: &mut FrictionDae,
+    s: &TimeState,
+    h: f64,
+    prev: Option<(&[f64], f64)>,
+    tol: f64,
+    kin_tol: f64,
+) -> Result<Option<Trial>> {
+    dae.prepare(s)?;
+    let z0: Vec<f64> = (0..dae.n_pairs()).flat_map(|i| dae.chart(i).1.c).collect();
+    let guess = TimeState {
+        t: s.t + h,
+        ..s.clone()
+    };
+    let Some(end) = newton_stage(dae, guess, &z0, h, tol, kin_tol)? else {
+        return Ok(None);
+    };
+    let (weight, predictor): (f64, Vec<f64>) = match prev {
+        Some((u_prev, h_prev)) if h_prev > 0.0 => (
+            h / (h + h_prev),
+            s.u.iter()
+                .zip(u_prev)
+                .map(|(a, b)| a + h / h_prev * (a - b))
+                .collect(),
+        ),
+        _ => (0.5, s.u.clone()),
+    };
+    // On the tangential coordinates dC/dx·Δx, the differential unknowns:
+    // a node's normal position is algebraic (the contact law), and its
+    // distance from the predictor is the start's residual corrected, not a
+    // truncation error (measured: with it, the sliding plate's steps
+    // collapsed to 6e-17 s at its start).
+    let (mut worst_dof, mut error) = (0, 0.0f64);
+    for p in 0..dae.n_pairs() {
+        let dofs = dae.pair_dofs(p);
+        let dc = dae.chart(p).1.dc;
+        for g in dc {
+            let e = weight
+                * (0..3)
+                    .map(|c| g[c] * (end.u[dofs[c]] - predictor[dofs[c]]))
+                    .sum::<f64>()
+                    .abs();
+            if e > error {
+                (worst_dof, error) = (dofs[0], e);
+            }
+        }
+    }
+    Ok(Some(Trial {
+        end,
+        error,
+        worst_dof,
+        error_order: 2.0,
+    }))
+}
+
+/// The Newton iteration of [`newton_trial`] from `y` (its time the step
+/// end's) on E = 0, C(x) − ẑ − hg D w = 0: the converged state, or None.
+fn newton_stage(
+    dae: &mut FrictionDae,
+    mut y: TimeState,
+    zhat: &[f64],
+    hg: f64,
+    tol: f64,
+    kin_tol: f64,
+) -> Result<Option<TimeState>> {
+    let n = y.u.len();
+    for _ in 0..NEWTON_ITERATIONS {
+        if !dae.relinearize_in_charts(&y, hg)? {
+            return Ok(None);
+        }
+        let Ok(r) = stage_residual(dae, &y, zhat, hg) else {
+            return Ok(None);
+        };
+        if r.converged(tol, kin_tol) {
+            return Ok(Some(y));
+        }
+        let rs = dae.row_scale();
+        let rhs: Vec<f64> =
+            r.e.iter()
+                .map(|e| -e)
+                .chain(r.kin.iter().map(|k| -rs * k))
+                .collect();
+        debug_assert_eq!(rhs.len(), n + r.kin.len());
+        let d = dae.solve(&rhs, y.t)?;
+        // Backtracking on |E|² + (row_scale |kinematics|)²: the law is a
+        // sigmoid of the slip, on which a full step from its bend
+        // overshoots.
+        let merit = r.merit(rs);
+        let mut alpha = 1.0;
+        let mut next = None;
+        for _ in 0..20 {
+            let trial = dae.moved(&y, &d, alpha);
+            if let Ok(rt) = stage_residual(dae, &trial, zhat, hg)
+                && rt.merit(rs) < merit
+            {
+                next = Some(trial);
+                break;
+            }
+            alpha *= 0.5;
+        }
+        match next {
+            Some(t) => y = t,
+            None => return Ok(None),
+        }
+    }
+    let r = stage_residual(dae, &y, zhat, hg)?;
+    Ok(r.converged(tol, kin_tol).then_some(y))
+}
+
+/// The residuals of [`newton_trial`]'s equations at y.
+struct StageResidual {
+    e: Vec<f64>,
+    kin: Vec<f64>,
+    /// The force scale of the residual test.
+    scale: f64,
+}
+
+impl StageResidual {
+    fn converged(&self, tol: f64, kin_tol: f64) -> bool {
+        crate::linalg::norm(&self.e) <= tol * self.scale
+            && self.kin.iter().all(|k| k.abs() <= kin_tol)
+    }
+
+    fn merit(&self, rs: f64) -> f64 {
+        self.e.iter().map(|e| e * e).sum::<f64>()
+            + self.kin.iter().map(|k| (rs * k).powi(2)).sum::<f64>()
+    }
+}
+
+fn stage_residual(
+    dae: &mut FrictionDae,
+    y: &TimeState,
+    zhat: &[f64],
+    hg: f64,
+) -> Result<StageResidual> {
+    let e = dae.residual(y)?;
+    if !e.iter().all(|v| v.is_finite()) {
+        return Err(crate::error::Error::NonFinite {
+            step: 0,
+            param: "t",
+            at: y.t,
+            what: "equilibrium residual of an implicit stage".into(),
+        });
+    }
+    let xs = dae.pair_positions(&y.u, y.t);
+    let pairs: Vec<usize> = dae.step_pairs().map(|(p, _)| p).collect();
+    let mut kin = vec![0.0; 2 * dae.n_pairs()];
+    for p in 0..dae.n_pairs() {
+        let w = y.w[pairs[p]];
+        let v = dae.chart(p).0.eval(&xs[p], w);
+        for a in 0..2 {
+            kin[2 * p + a] = v.c[a] - zhat[2 * p + a] - hg * v.d[a] * w[a];
+        }
+    }
+    Ok(StageResidual {
+        e,
+        kin,
+        scale: dae.force_scale().max(f64::MIN_POSITIVE),
+    })
 }

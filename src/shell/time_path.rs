@@ -13,7 +13,10 @@
 //! - the implicit RODAS4 step of [`super::implicit_step`], settled onto the
 //!   equilibrium at its start, error-controlled, ending on output times and
 //!   kinks ([`run_implicit`]); `auto` takes the series instead wherever its
-//!   step reaches as far.
+//!   step reaches as far. Where three RODAS4 trials in a row fail from one
+//!   start, the step is taken fully implicit, by backward Euler solved by
+//!   Newton ([`super::implicit_step::newton_trial`]), and so are the
+//!   [`NEWTON_STEPS`] steps after it.
 //!
 //! Both stop with a diagnosis (time, node) when the step collapses below
 //! `min_step` or the step budget is spent.
@@ -102,6 +105,9 @@ pub struct TimeStats {
     pub rejected: usize,
     /// Steps taken by the implicit step (the rest by the series).
     pub implicit: usize,
+    /// Of those, the steps by the fully implicit (Newton) stages
+    /// ([`super::implicit_step::newton_trial`]).
+    pub newton: usize,
     pub factorizations: usize,
     pub corrections: usize,
     pub max_residual: f64,
@@ -375,7 +381,9 @@ fn largest_node(dae: &FrictionDae, term: &[f64]) -> usize {
 /// start settled onto the equilibrium with it ([`implicit_step::settle`]),
 /// the stages. A trial is accepted where the error estimate of U passes
 /// and the equilibrium residual at its end is within `residual_tol`;
-/// h ← h · clamp(0.9 err^(−1/4), 0.2, 5).
+/// h ← h · clamp(0.9 err^(−1/p), 0.2, 5), p the estimate's order (4 for
+/// RODAS4, 2 for the backward Euler step that takes over after three
+/// failed trials).
 fn run_implicit(
     dae: &mut FrictionDae,
     cfg: &TimeConfig,
@@ -401,6 +409,10 @@ fn run_implicit(
     // Auto: steps until the series is tried again, and the current period.
     let mut probe_wait = 0usize;
     let mut probe_every = 1usize;
+    // Steps left that take the backward Euler step directly.
+    let mut newton_left = 0usize;
+    // The last step's start and length (the backward Euler error estimate).
+    let mut prev: Option<(Vec<f64>, f64)> = None;
     let per_node = crate::fe::dof::PER_NODE;
     let mut translation = vec![false; s.u.len()];
     for (full, free) in dae.model.free.iter().enumerate() {
@@ -499,24 +511,41 @@ fn run_implicit(
         }
         let mut rejections = 0;
         let accepted: Trial = loop {
+            // Fully implicit (Newton) stages where the Rosenbrock ones keep
+            // failing from this start, and for a few steps after.
+            let newton = newton_left > 0 || rejections >= 3;
+            let attempt = if newton {
+                implicit_step::newton_trial(
+                    dae,
+                    &s,
+                    length,
+                    prev.as_ref().map(|(u, h)| (u.as_slice(), *h)),
+                    cfg.residual_tol * 1e-2,
+                    atol,
+                )
+            } else {
+                implicit_step::trial(dae, &s, length).map(Some)
+            };
             // The error relative to what the test allows.
-            let attempt = implicit_step::trial(dae, &s, length).map(|mut t| {
-                let size = size_of(&s.u).max(size_of(&t.end.u)).max(scale);
-                t.error /= (cfg.eps * size).max(atol);
-                t
+            let attempt = attempt.map(|t| {
+                t.map(|mut t| {
+                    let size = size_of(&s.u).max(size_of(&t.end.u)).max(scale);
+                    t.error /= (cfg.eps * size).max(atol);
+                    t
+                })
             });
             // The end must also lie near the equilibrium (the algebraic
             // part), which the error test on U does not see: in saturated
             // slip the stages' w swing far from the linearization.
             let end_residual = match &attempt {
-                Ok(t) if t.error.is_finite() && t.error <= 1.0 => {
+                Ok(Some(t)) if t.error.is_finite() && t.error <= 1.0 => {
                     norm(&dae.residual(&t.end)?) / dae.force_scale().max(f64::MIN_POSITIVE)
                 }
                 _ => f64::NAN,
             };
             let (factor, diagnosis) = match attempt {
-                Ok(t) if end_residual <= cfg.residual_tol => break t,
-                Ok(t) if t.error.is_finite() && t.error <= 1.0 => {
+                Ok(Some(t)) if end_residual <= cfg.residual_tol => break t,
+                Ok(Some(t)) if t.error.is_finite() && t.error <= 1.0 => {
                     last_dof = t.worst_dof;
                     (
                         0.5,
@@ -525,14 +554,18 @@ fn run_implicit(
                         ),
                     )
                 }
-                Ok(t) if t.error.is_finite() => {
+                Ok(Some(t)) if t.error.is_finite() => {
                     last_dof = t.worst_dof;
                     (
-                        (0.9 * t.error.powf(-1.0 / ERROR_ORDER)).max(0.2),
+                        (0.9 * t.error.powf(-1.0 / t.error_order)).max(0.2),
                         "the error estimate exceeds eps".to_string(),
                     )
                 }
-                Ok(_) => (0.25, "the error estimate is not finite".to_string()),
+                Ok(Some(_)) => (0.25, "the error estimate is not finite".to_string()),
+                Ok(None) => (
+                    0.25,
+                    "the Newton iteration of the backward Euler step did not converge".to_string(),
+                ),
                 // A stage past the law's range (e.g. an unbounded slip
                 // speed): the stage's own error names the entry, not t.
                 Err(Error::NonFinite { what, .. }) => {
@@ -577,11 +610,20 @@ fn run_implicit(
                     ),
                 });
             }
-            dae.factor_implicit(length * RODAS4.gamma, s.t)?;
+            if !newton && rejections < 3 {
+                dae.factor_implicit(length * RODAS4.gamma, s.t)?;
+            }
+        };
+        newton_left = if newton_left > 0 {
+            newton_left - 1
+        } else if accepted.error_order < ERROR_ORDER {
+            NEWTON_STEPS
+        } else {
+            0
         };
         last_dof = accepted.worst_dof;
         let grow = if accepted.error > 0.0 {
-            (0.9 * accepted.error.powf(-1.0 / ERROR_ORDER)).clamp(0.2, 5.0)
+            (0.9 * accepted.error.powf(-1.0 / accepted.error_order)).clamp(0.2, 5.0)
         } else {
             5.0
         };
@@ -590,6 +632,7 @@ fn run_implicit(
         } else {
             length * grow
         };
+        prev = Some((std::mem::take(&mut s.u), accepted.end.t - s.t));
         s = accepted.end;
         if (s.t - target).abs() <= 1e-12 * target.abs().max(1.0) {
             s.t = target;
@@ -597,10 +640,15 @@ fn run_implicit(
         scale = scale.max(size_of(&s.u));
         stats.steps += 1;
         stats.implicit += 1;
+        stats.newton += usize::from(accepted.error_order < ERROR_ORDER);
         progress(s.t, stats.steps);
     }
     Ok(finish(dae, samples, stop, stats))
 }
+
+/// Steps taken by backward Euler after one that needed it
+/// (the Rosenbrock stages are tried again after).
+pub const NEWTON_STEPS: usize = 4;
 
 /// The node (0-based) of a free dof.
 fn node_of_dof(dae: &FrictionDae, k: usize) -> usize {
