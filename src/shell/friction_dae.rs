@@ -421,6 +421,83 @@ impl FrictionDae {
         out
     }
 
+    /// A Newton direction d = (δU, δw) at y with its w part taken through
+    /// the law's inverse (q = 0 only; otherwise d unchanged): per friction
+    /// node, the linearized friction force R_T + ∂R_T/∂x δx + ∂R_T/∂w δw,
+    /// over the cap f |R_N|_reg, is φ; where |φ| < 1 the new slip is the one
+    /// the law maps to it, v_a = −ω Vc φ_a / √(1 − |φ|²); a node not yet
+    /// saturated whose |φ| ≥ 1 goes to |φ| = 0.999 along it. Why: the law is
+    /// a sigmoid of the slip of width ω Vc; a node that leaves saturation
+    /// or enters it crosses that width, where the Newton step in w
+    /// overshoots by orders of magnitude and the line search must shrink
+    /// the whole step with it (measured: the conveying strip at ω = 1e-5
+    /// stalled at α ≈ 1e-6), while the force it should carry is what the
+    /// linearization gets right.
+    pub fn law_space_direction(&mut self, y: &TimeState, d: &[f64]) -> Vec<f64> {
+        let mut out = d.to_vec();
+        let law = self.laws.law;
+        if law.q != 0.0 {
+            return out;
+        }
+        let n = self.model.ndof();
+        let eps_v = law.omega * law.vc;
+        let [m0, _] = self.motion_factor(y.t);
+        let xs = self.pair_positions(&y.u, y.t);
+        for (i, fp) in self.pairs.iter_mut().enumerate() {
+            let x = xs[i];
+            let w = y.w[fp.pair];
+            let v = fp.tape.eval(&[x[0], x[1], x[2], w[0], w[1], m0]);
+            let jac = fp
+                .tape
+                .jacobian(&[0, 1, 2, friction_pair::W, friction_pair::W + 1]);
+            let dofs = self.node_dofs[i];
+            let dx = [d[dofs[0]], d[dofs[1]], d[dofs[2]]];
+            let dw = [d[n + 2 * i], d[n + 2 * i + 1]];
+            let cap = law.f * law.normal_magnitude(v[friction_pair::RN]);
+            let frame = [friction_pair::T1, friction_pair::T2]
+                .map(|slot| Vector3::new(v[slot], v[slot + 1], v[slot + 2]));
+            let force = |lin: bool| -> Vector3<f64> {
+                Vector3::from_fn(|r, _| {
+                    let mut f = v[friction_pair::FORCE + r];
+                    if lin {
+                        f += (0..3)
+                            .map(|c| jac[friction_pair::FORCE + r][c] * dx[c])
+                            .sum::<f64>()
+                            + (0..2)
+                                .map(|c| jac[friction_pair::FORCE + r][3 + c] * dw[c])
+                                .sum::<f64>();
+                    }
+                    f
+                })
+            };
+            let phi_of = |f: Vector3<f64>| frame.map(|t| t.dot(&f) / cap);
+            let now = phi_of(force(false));
+            let mut target = phi_of(force(true));
+            let size = |p: [f64; 2]| (p[0] * p[0] + p[1] * p[1]).sqrt();
+            let (size_now, size_target) = (size(now), size(target));
+            if !(cap > 0.0 && size_target.is_finite()) {
+                continue;
+            }
+            if size_target >= 1.0 {
+                if size_now >= 0.999 {
+                    continue; // saturated now and after: the law is flat, d is right
+                }
+                target = target.map(|p| p * 0.999 / size_target);
+            }
+            let root = (1.0 - size(target).powi(2)).sqrt();
+            let slip = Vector3::new(
+                v[friction_pair::SLIP],
+                v[friction_pair::SLIP + 1],
+                v[friction_pair::SLIP + 2],
+            );
+            for a in 0..2 {
+                let v_new = -eps_v * target[a] / root;
+                out[n + 2 * i + a] = v_new - frame[a].dot(&slip);
+            }
+        }
+        out
+    }
+
     /// The friction node whose residual force is the largest multiple of
     /// its friction cap f |R_N|_reg, and that multiple, for the residual
     /// `r` of [`FrictionDae::residual`] (its tapes at the same state).

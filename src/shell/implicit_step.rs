@@ -346,21 +346,24 @@ fn newton_stage(
                 .collect();
         debug_assert_eq!(rhs.len(), n + r.kin.len());
         let d = dae.solve(&rhs, y.t)?;
-        // Backtracking on |E|² + (row_scale |kinematics|)²: the law is a
-        // sigmoid of the slip, on which a full step from its bend
-        // overshoots.
+        // Backtracking on |E|² + (row_scale |kinematics|)², along the
+        // direction with its slips through the law's inverse first
+        // ([`FrictionDae::law_space_direction`]), then along Newton's own.
         let merit = r.merit(rs);
-        let mut alpha = 1.0;
+        let law_space = dae.law_space_direction(&y, &d);
         let mut next = None;
-        for _ in 0..20 {
-            let trial = dae.moved(&y, &d, alpha);
-            if let Ok(rt) = stage_residual(dae, &trial, zhat, hg)
-                && rt.merit(rs) < merit
-            {
-                next = Some(trial);
-                break;
+        'directions: for dir in [&law_space, &d] {
+            let mut alpha = 1.0;
+            for _ in 0..20 {
+                let trial = dae.moved(&y, dir, alpha);
+                if let Ok(rt) = stage_residual(dae, &trial, zhat, hg)
+                    && rt.merit(rs) < merit
+                {
+                    next = Some(trial);
+                    break 'directions;
+                }
+                alpha *= 0.5;
             }
-            alpha *= 0.5;
         }
         match next {
             Some(t) => y = t,
