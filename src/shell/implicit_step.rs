@@ -329,14 +329,14 @@ fn newton_stage(
 ) -> Result<Option<TimeState>> {
     let n = y.u.len();
     for _ in 0..NEWTON_ITERATIONS {
-        if !dae.relinearize_in_charts(&y, hg)? {
-            return Ok(None);
-        }
         let Ok(r) = stage_residual(dae, &y, zhat, hg) else {
             return Ok(None);
         };
         if r.converged(tol, kin_tol) {
             return Ok(Some(y));
+        }
+        if !dae.relinearize_in_charts(&y, hg)? {
+            return Ok(None);
         }
         let rs = dae.row_scale();
         let rhs: Vec<f64> =
