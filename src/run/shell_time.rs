@@ -48,7 +48,8 @@ pub struct TimeReport {
     /// `solver.time_step` and the steps taken by the implicit step.
     pub time_step: String,
     pub implicit_steps: usize,
-    /// Of those, the steps by the fully implicit (Newton) stages.
+    /// Of those, the backward Euler steps solved by Newton (where the
+    /// Rosenbrock step failed three times, and the 4 steps after).
     pub newton_steps: usize,
     /// Implicit trials rejected (error test or end residual).
     pub rejected: usize,

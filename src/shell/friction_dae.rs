@@ -317,10 +317,10 @@ impl FrictionDae {
         Ok(())
     }
 
-    /// Re-linearizes at `s` for a Newton iteration of a fully implicit
-    /// stage ([`super::implicit_step::newton_trial`]) and factorizes
-    /// M/(h γ) − J there with `hg` = h γ, keeping the charts of the last
-    /// [`FrictionDae::prepare`] (the stage's z is measured in them). False,
+    /// Re-linearizes at `s` for a Newton iteration of the backward Euler
+    /// step ([`super::implicit_step::newton_trial`]) and factorizes
+    /// M/hg − J there (`hg` its h), keeping the charts of the last
+    /// [`FrictionDae::prepare`] (the step's z is measured in them). False,
     /// with nothing factorized, where the set of friction pairs changed
     /// (the contact search moved a pair in or out: the step must be
     /// shorter).

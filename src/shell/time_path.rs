@@ -105,7 +105,7 @@ pub struct TimeStats {
     pub rejected: usize,
     /// Steps taken by the implicit step (the rest by the series).
     pub implicit: usize,
-    /// Of those, the steps by the fully implicit (Newton) stages
+    /// Of those, the backward Euler steps solved by Newton
     /// ([`super::implicit_step::newton_trial`]).
     pub newton: usize,
     pub factorizations: usize,
