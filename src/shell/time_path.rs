@@ -511,7 +511,7 @@ fn run_implicit(
         }
         let mut rejections = 0;
         let accepted: Trial = loop {
-            // Fully implicit (Newton) stages where the Rosenbrock ones keep
+            // Backward Euler solved by Newton where the Rosenbrock stages keep
             // failing from this start, and for a few steps after.
             let newton = newton_left > 0 || rejections >= 3;
             let attempt = if newton {
