@@ -9,9 +9,11 @@
 //!   carries no friction, so their two sides carry the same tension and
 //!   their nodes stick.
 
+use anm::run::along_strip::AlongRow;
 use anm::run::{along_strip, shell_time};
 use anm::scene::shell::load;
-use anm::shell::time_path::TimeStop;
+use anm::shell::friction_dae::FrictionDae;
+use anm::shell::time_path::{TimeSample, TimeStop};
 use std::f64::consts::FRAC_PI_2;
 
 /// The conveying scene with 0.1 m elements on the spans, 0.03 m on the arcs
@@ -31,6 +33,38 @@ fn coarse_conveying() -> anm::scene::shell::ShellScene {
     let path = dir.join("strip-conveying-coarse.toml");
     std::fs::write(&path, text).expect("write scene");
     load(&path).expect("scene loads")
+}
+
+/// The cross-section rows along the strip at the run's last sample (slip
+/// counted above `threshold`) and the rows of roller 2's entry and exit.
+fn roller_two_rows(
+    sc: &anm::scene::shell::ShellScene,
+    dae: &FrictionDae,
+    end: &TimeSample,
+    threshold: f64,
+) -> (Vec<AlongRow>, usize, usize) {
+    let grid = sc.mesh.grid.expect("a built-in mesh");
+    let rows = along_strip::rows(
+        &dae.model,
+        &grid,
+        &sc.mesh.quads,
+        sc.thickness,
+        &end.full,
+        &end.friction,
+        threshold,
+    );
+    let row_of = |group: &str| grid.row_of(&sc.mesh.groups[group]).expect("a row");
+    (rows, row_of("r2_in"), row_of("r2_out"))
+}
+
+/// The slip speeds of the friction nodes on roller `name`'s arc.
+fn arc_slips(sc: &anm::scene::shell::ShellScene, end: &TimeSample, name: &str) -> Vec<f64> {
+    let nodes = &sc.mesh.groups[&format!("{name}_arc")];
+    end.friction
+        .iter()
+        .filter(|f| nodes.binary_search(&f.node).is_ok())
+        .map(|f| f.slip.norm())
+        .collect()
 }
 
 #[test]
@@ -71,19 +105,8 @@ fn conveying_strip_reaches_the_euler_eytelwein_steady_state() {
     // The tension along roller 2's arc and the slip map.
     let (run, dae) = shell_time::solve(&sc).expect("runs");
     let end = run.samples.last().expect("samples");
-    let grid = sc.mesh.grid.expect("a built-in mesh");
     let threshold = 10.0 * law.omega * law.vc;
-    let rows = along_strip::rows(
-        &dae.model,
-        &grid,
-        &sc.mesh.quads,
-        sc.thickness,
-        &end.full,
-        &end.friction,
-        threshold,
-    );
-    let row_of = |group: &str| grid.row_of(&sc.mesh.groups[group]).expect("a row");
-    let (j_in, j_out) = (row_of("r2_in"), row_of("r2_out"));
+    let (rows, j_in, j_out) = roller_two_rows(&sc, &dae, end, threshold);
     let radius = 0.30000001;
     let mut worst = 0.0f64;
     for j in j_in + 1..j_out {
@@ -93,14 +116,7 @@ fn conveying_strip_reaches_the_euler_eytelwein_steady_state() {
     }
     println!("tension on roller 2's arc against T_in exp(−f g φ): largest deviation {worst:.1e}");
     assert!(worst < 2e-3, "{worst}");
-    let on = |name: &str| {
-        let nodes = &sc.mesh.groups[&format!("{name}_arc")];
-        end.friction
-            .iter()
-            .filter(|f| nodes.binary_search(&f.node).is_ok())
-            .map(|f| f.slip.norm())
-            .collect::<Vec<_>>()
-    };
+    let on = |name: &str| arc_slips(&sc, end, name);
     let r2 = on("r2");
     let slowest = r2.iter().copied().fold(f64::INFINITY, f64::min);
     println!(
@@ -171,18 +187,7 @@ fn runs_with_roller_two_in_full_slip(sc: &anm::scene::shell::ShellScene) {
     let v = 0.01;
     let g = v / (v * v + (law.omega * law.vc).powi(2)).sqrt();
     let end = run.samples.last().expect("samples");
-    let grid = sc.mesh.grid.expect("a built-in mesh");
-    let rows = along_strip::rows(
-        &dae.model,
-        &grid,
-        &sc.mesh.quads,
-        sc.thickness,
-        &end.full,
-        &end.friction,
-        10.0 * law.omega * law.vc,
-    );
-    let row_of = |group: &str| grid.row_of(&sc.mesh.groups[group]).expect("a row");
-    let (j_in, j_out) = (row_of("r2_in"), row_of("r2_out"));
+    let (rows, j_in, j_out) = roller_two_rows(sc, &dae, end, 10.0 * law.omega * law.vc);
     let radius = 0.30000001;
     // Across the roller, span to span: T_out = T_in exp(−f g θ_2), θ_2 = π/2.
     let (span_in, span_out) = (rows[j_in - 1].tension, rows[j_out + 1].tension);
@@ -201,12 +206,8 @@ fn runs_with_roller_two_in_full_slip(sc: &anm::scene::shell::ShellScene) {
     );
     assert!(across.abs() < 1e-3, "{across}");
     assert!(worst < 2e-3, "{worst}");
-    let nodes = &sc.mesh.groups["r2_arc"];
-    let slowest = end
-        .friction
-        .iter()
-        .filter(|f| nodes.binary_search(&f.node).is_ok())
-        .map(|f| f.slip.norm())
+    let slowest = arc_slips(sc, end, "r2")
+        .into_iter()
         .fold(f64::INFINITY, f64::min);
     println!("roller 2: slowest slip {slowest:.6} m/s");
     assert!(slowest > 0.99 * v, "{slowest}");
