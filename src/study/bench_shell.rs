@@ -132,7 +132,7 @@ pub fn solve(scene: &ShellScene, method: &ShellMethod) -> Result<RunReport> {
     run_loaded(&method.configure(scene), None, false)
 }
 
-/// The benchmark matrix: ANM N = 10, 15, 20 x eps 1e-4, 1e-6, 1e-8, with
+/// The benchmark matrix: ANM N = 10, 15, 20 x eps 1e-4 … 1e-10, with
 /// and without Padé, at the scene's residual tolerance and at each of
 /// [`ANM_RESIDUAL_TOLS`]; Newton by load control (increments up to 0.005 …
 /// 0.05) and arclength control, at |R| / |F| <= 1e-3 … 1e-7, and
@@ -143,7 +143,7 @@ pub fn methods() -> Vec<ShellMethod> {
     for residual_tol in tols {
         for pade in [false, true] {
             for order in [10, 15, 20] {
-                for eps in [1e-4, 1e-6, 1e-8] {
+                for eps in [1e-4, 1e-6, 1e-8, 1e-10] {
                     m.push(ShellMethod::Anm {
                         order,
                         eps,
