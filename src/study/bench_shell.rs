@@ -223,7 +223,7 @@ fn reference_at(scene: &ShellScene, tol: f64) -> Result<ShellReference> {
     Ok(ShellReference {
         report,
         name: format!(
-            "{} {} (step-end |R|/|F| <= {tol:.0e})",
+            "{} {} (tol: the step-end |R|/|F|)",
             anm.label(),
             anm.setting()
         ),
