@@ -72,7 +72,7 @@ fn main() {
                 }
                 t_inner += t_in.elapsed().as_secs_f64();
                 for (e, st) in elements.iter().zip(&mut series) {
-                    checksum += st.complete_and_rhs(e, &xs, &ds)[3];
+                    checksum += st.complete_and_rhs(e, &xs, &ds, &mut cache)[3];
                 }
             }
             t_orders += t.elapsed().as_secs_f64();

@@ -367,6 +367,20 @@ fn error_chain(e: &anyhow::Error) -> String {
 }
 
 fn main() -> ExitCode {
+    // Built for x86-64-v3 (.cargo/config.toml): on a CPU without AVX2 the
+    // first vector instruction would end the process with SIGILL and no word.
+    #[cfg(all(target_arch = "x86_64", target_feature = "avx2"))]
+    if !(std::arch::is_x86_feature_detected!("avx2")
+        && std::arch::is_x86_feature_detected!("fma")
+        && std::arch::is_x86_feature_detected!("bmi2"))
+    {
+        eprintln!(
+            "error: this anm was built for x86-64-v3 (AVX2, FMA, BMI2; .cargo/config.toml) \
+             and this CPU lacks them; rebuild with \
+             RUSTFLAGS=\"-C target-cpu=x86-64\" cargo build --release"
+        );
+        return ExitCode::from(2);
+    }
     // A closed stdout (`anm ... | head`) ends the process as for any Unix
     // tool, not with a panic in println!.
     #[cfg(unix)]

@@ -78,6 +78,10 @@ impl LogReaction {
 
     /// (c R_m − (1/m) Σ_{k=1}^{m−1} k y_k R_{m−k}) / rho_0.
     fn coefficient(&self, rm: f64, r: &[f64], m: usize) -> f64 {
+        // Off: every y_k is 0 (the sum below would give 0 too).
+        if self.c == 0.0 {
+            return 0.0;
+        }
         let mut s = 0.0;
         for k in 1..m {
             s += k as f64 * self.y[k] * r[m - k];

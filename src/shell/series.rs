@@ -86,19 +86,28 @@ fn add_gram_pair(yr: &NodalVectors, ys: &NodalVectors, m: &mut PackedSym) {
     }
 }
 
-/// f += Y Kg for a packed symmetric Kg: (Y Kg)_{:,b} = Σ_a Y_{:,a} Kg_ab
-/// (constant bounds and indices: the loops unroll, no branch).
+/// f += Y Kg for a packed symmetric Kg, row by row of f: Kg unpacked to
+/// rows padded to 8, so that each row of f is a sum of 7 scaled rows of Kg
+/// that vectorizes (a column of f, 3 entries, does not). Every entry is the
+/// same sum in the same order as column by column, Σ_a Y_da Kg_ab for
+/// a = 0..7, then added to f: the same results to the bit.
 fn add_product(y: &NodalVectors, kg: &PackedSym, f: &mut NodalVectors) {
-    for b in 0..NCOL {
-        let mut col = [0.0; 3];
-        for a in 0..NCOL {
-            let v = kg[SYM_INDEX[a][b]];
-            for (d, c) in col.iter_mut().enumerate() {
-                *c += y[(d, a)] * v;
+    let mut k = [[0.0; 8]; NCOL];
+    for (a, row) in k.iter_mut().enumerate() {
+        for (b, v) in row.iter_mut().take(NCOL).enumerate() {
+            *v = kg[SYM_INDEX[a][b]];
+        }
+    }
+    for d in 0..3 {
+        let mut acc = [0.0; 8];
+        for (a, row) in k.iter().enumerate() {
+            let yda = y[(d, a)];
+            for (s, v) in acc.iter_mut().zip(row) {
+                *s += yda * v;
             }
         }
-        for (d, c) in col.iter().enumerate() {
-            f[(d, b)] += c;
+        for (b, s) in acc.iter().take(NCOL).enumerate() {
+            f[(d, b)] += s;
         }
     }
 }
@@ -268,6 +277,7 @@ impl ElementSeries {
         e: &ShellElement,
         xm: &[Vec3; 4],
         dm: &[Vec3; 4],
+        cache: &mut FullMapCache,
     ) -> [f64; NDOF_EL] {
         let m = self.y.len();
         let kg_star_m = match self.kg_star.take() {
@@ -285,7 +295,7 @@ impl ElementSeries {
         let q = m + 1;
         let Some(ahead) = self.ahead.take().filter(|a| a.order == q) else {
             let (kg_first, kg_star) =
-                e.packed_geometric_pair(&first, &gram_convolution(&self.y, q, 1));
+                e.packed_geometric_pair(&first, &gram_convolution(&self.y, q, 1), cache);
             self.kg.push(kg_star_m + kg_first);
             return self.force(q, kg_star);
         };
@@ -293,7 +303,7 @@ impl ElementSeries {
         // + f_inner + Y_m Kg_1 (q ≥ 4: orders 1 and m differ).
         let mut gram = ahead.gram;
         add_gram_pair(&self.y[1], &self.y[m], &mut gram);
-        let (kg_first, kg_star) = e.packed_geometric_pair(&first, &gram);
+        let (kg_first, kg_star) = e.packed_geometric_pair(&first, &gram, cache);
         self.kg.push(kg_star_m + kg_first);
         let mut f = ahead.force;
         add_product(&self.y[0], &kg_star, &mut f);
@@ -323,6 +333,27 @@ mod tests {
     use nalgebra::{SMatrix, SVector};
 
     use crate::shell::element::tests::element;
+
+    /// add_product row by row equals the column-by-column sums
+    /// Σ_a Y_da Kg_ab (a = 0..7, in order) to the bit.
+    #[test]
+    fn product_by_rows_equals_the_column_sums_to_the_bit() {
+        let y = NodalVectors::from_fn(|d, a| ((3 * a + d) as f64 * 0.37).sin());
+        let kg = PackedSym::from_fn(|k, _| (k as f64 * 1.9 + 0.3).cos() * 1e4);
+        let f0 = NodalVectors::from_fn(|d, a| (d + a) as f64 * 1e-3);
+        let mut f = f0;
+        add_product(&y, &kg, &mut f);
+        for b in 0..NCOL {
+            for d in 0..3 {
+                let mut s = 0.0;
+                for a in 0..NCOL {
+                    s += y[(d, a)] * kg[SYM_INDEX[a][b]];
+                }
+                let want = f0[(d, b)] + s;
+                assert_eq!(f[(d, b)].to_bits(), want.to_bits(), "({d}, {b})");
+            }
+        }
+    }
 
     fn nodal(seed: f64, scale: f64) -> ([Vec3; 4], [Vec3; 4]) {
         let v =
@@ -415,16 +446,24 @@ mod tests {
                 ([Vec3::zeros(); 4], [Vec3::zeros(); 4])
             };
             let mut ahead = st.clone();
-            let f = SVector::from_column_slice(&ahead.complete_and_rhs(&e, &xp, &dp));
+            let f = SVector::from_column_slice(&ahead.complete_and_rhs(
+                &e,
+                &xp,
+                &dp,
+                &mut FullMapCache::default(),
+            ));
             // With the inner terms of order p + 1 computed beforehand (as
             // during the solve of order p): the same right-hand side.
             if p + 1 >= 4 {
                 let mut prepared = st.clone();
                 prepared.prepare(p + 1);
                 assert!(prepared.has_ahead(p + 1));
-                let g = SVector::<f64, NDOF_EL>::from_column_slice(
-                    &prepared.complete_and_rhs(&e, &xp, &dp),
-                );
+                let g = SVector::<f64, NDOF_EL>::from_column_slice(&prepared.complete_and_rhs(
+                    &e,
+                    &xp,
+                    &dp,
+                    &mut FullMapCache::default(),
+                ));
                 let diff = (f - g).norm() / scale;
                 assert!(
                     diff < 1e-14,
