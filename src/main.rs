@@ -372,10 +372,15 @@ fn main() -> ExitCode {
     #[cfg(all(target_arch = "x86_64", target_feature = "avx2"))]
     if !(std::arch::is_x86_feature_detected!("avx2")
         && std::arch::is_x86_feature_detected!("fma")
-        && std::arch::is_x86_feature_detected!("bmi2"))
+        && std::arch::is_x86_feature_detected!("bmi1")
+        && std::arch::is_x86_feature_detected!("bmi2")
+        && std::arch::is_x86_feature_detected!("lzcnt")
+        && std::arch::is_x86_feature_detected!("movbe")
+        && std::arch::is_x86_feature_detected!("f16c"))
     {
         eprintln!(
-            "error: this anm was built for x86-64-v3 (AVX2, FMA, BMI2; .cargo/config.toml) \
+            "error: this anm was built for x86-64-v3 (AVX2, FMA, BMI1/2, LZCNT, MOVBE, F16C; \
+             .cargo/config.toml) \
              and this CPU lacks them; rebuild with \
              RUSTFLAGS=\"-C target-cpu=x86-64\" cargo build --release"
         );
