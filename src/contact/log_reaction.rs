@@ -42,25 +42,34 @@ pub struct LogReaction {
 impl LogReaction {
     /// Order 0 at gap h0 with reaction r0 = law.force(h0), weight c >= 0.
     pub fn start(c: f64, law: &NormalLaw, h0: f64, r0: f64, orders: usize) -> Self {
+        let mut series = Self {
+            c: 0.0,
+            inv_rho0: 0.0,
+            dy_dh: 0.0,
+            y: Vec::with_capacity(orders),
+        };
+        series.restart(c, law, h0, r0, orders);
+        series
+    }
+
+    /// [`LogReaction::start`] in the buffer of an earlier series.
+    pub fn restart(&mut self, c: f64, law: &NormalLaw, h0: f64, r0: f64, orders: usize) {
         let rho0 = r0 + law.eta;
         let root = 2.0 * r0 / law.k + h0;
         let on = c > 0.0 && rho0 > 0.0 && root > 0.0 && rho0.is_finite() && root.is_finite();
-        let mut y = Vec::with_capacity(orders);
-        y.push(0.0);
-        if !on {
-            return Self {
-                c: 0.0,
-                inv_rho0: 0.0,
-                dy_dh: 0.0,
-                y,
-            };
-        }
-        Self {
-            c,
-            inv_rho0: 1.0 / rho0,
-            dy_dh: -c / root,
-            y,
-        }
+        self.y.clear();
+        self.y.reserve(orders);
+        self.y.push(0.0);
+        (self.c, self.inv_rho0, self.dy_dh) = if on {
+            (c, 1.0 / rho0, -c / root)
+        } else {
+            (0.0, 0.0, 0.0)
+        };
+    }
+
+    /// Prefetches the coefficients (fe::prefetch).
+    pub fn prefetch(&self) {
+        crate::fe::prefetch::prefetch(&self.y);
     }
 
     /// y_m from r = R_0..R_m, m = the next order (pushed).

@@ -24,6 +24,7 @@
 // Node/dof/component loops read better with explicit indices.
 #![allow(clippy::needless_range_loop)]
 
+use crate::fe::prefetch::prefetch;
 use crate::series::taylor::{div_coeff, sqrt_coeff};
 use nalgebra::{Matrix3, Vector3};
 
@@ -191,6 +192,23 @@ enum Kind {
 impl GapSeries {
     /// Order 0 at position x0. None where the gap is undefined.
     pub fn start(obstacle: &Obstacle, x0: &Vec3) -> Option<Self> {
+        let mut series = Self {
+            obstacle_kind: Kind::Plane(Vec3::zeros(), Vec3::zeros()),
+            y: Default::default(),
+            d2: vec![],
+            d: vec![],
+            n: Default::default(),
+            s: vec![],
+            h: vec![],
+        };
+        series.restart(obstacle, x0)?;
+        Some(series)
+    }
+
+    /// [`GapSeries::start`] in the buffers of an earlier series (no
+    /// allocation once they hold the orders of a step). None where the gap
+    /// is undefined (the series is then left unchanged).
+    pub fn restart(&mut self, obstacle: &Obstacle, x0: &Vec3) -> Option<()> {
         let g = obstacle.gap(x0)?;
         let kind = match obstacle {
             Obstacle::Plane { point, normal } => Kind::Plane(*point, *normal),
@@ -215,15 +233,20 @@ impl GapSeries {
             Kind::Plane(_, nrm) => *nrm,
             Kind::Cylinder(..) => y0 / d,
         };
-        Some(Self {
-            obstacle_kind: kind,
-            y: [vec![y0[0]], vec![y0[1]], vec![y0[2]]],
-            d2: vec![d * d],
-            d: vec![d],
-            n: [vec![nc[0]], vec![nc[1]], vec![nc[2]]],
-            s: vec![s0],
-            h: vec![g.h],
-        })
+        self.obstacle_kind = kind;
+        let first = |list: &mut Vec<f64>, v: f64| {
+            list.clear();
+            list.push(v);
+        };
+        for k in 0..3 {
+            first(&mut self.y[k], y0[k]);
+            first(&mut self.n[k], nc[k]);
+        }
+        first(&mut self.d2, d * d);
+        first(&mut self.d, d);
+        first(&mut self.s, s0);
+        first(&mut self.h, g.h);
+        Some(())
     }
 
     pub fn orders(&self) -> usize {
@@ -304,6 +327,17 @@ impl GapSeries {
     /// Completes order p = orders() from the point's order-p increment.
     pub fn complete(&mut self, xp: &Vec3) -> (f64, Vec3) {
         self.order(xp, true)
+    }
+
+    /// Prefetches every coefficient list (fe::prefetch): a pair's series
+    /// are small blocks scattered over the heap, each a cache miss.
+    pub fn prefetch(&self) {
+        for list in self.y.iter().chain(&self.n) {
+            prefetch(list);
+        }
+        for list in [&self.d2, &self.d, &self.s, &self.h] {
+            prefetch(list);
+        }
     }
 
     /// Order p = orders() with x_p = 0 (not stored).

@@ -39,6 +39,7 @@ use super::kinematics::{
 };
 use super::material::Material;
 use crate::error::{Error, Result};
+use crate::fe::prefetch::prefetch;
 
 /// Number of EAS parameters per element.
 pub const NEAS: usize = 5;
@@ -325,6 +326,13 @@ impl ShellElement {
     /// Prefetches the map (fe::prefetch).
     pub fn prefetch_map(&self) {
         self.kmap.prefetch();
+    }
+
+    /// Prefetches the fields the series pass reads before the map: the
+    /// nodes and the map's address.
+    pub fn prefetch_record(&self) {
+        prefetch(std::slice::from_ref(&self.nodes));
+        prefetch(std::slice::from_ref(&self.kmap));
     }
 
     /// [`ShellElement::packed_geometric`] of two matrices, on the full map

@@ -188,6 +188,15 @@ impl ElementSeries {
         prefetch(&self.kg);
     }
 
+    /// Prefetches the series' own record (the headers of its orders and
+    /// the inner terms): one element before [`ElementSeries::prefetch`] or
+    /// [`ElementSeries::prefetch_outer`], which read those headers to find
+    /// the orders (a read of a record the other thread wrote during the
+    /// solve otherwise stalls the loop).
+    pub fn prefetch_record(&self) {
+        prefetch(std::slice::from_ref(self));
+    }
+
     /// Whether the inner terms of order q are ready.
     pub fn has_ahead(&self, q: usize) -> bool {
         self.ahead.as_ref().is_some_and(|a| a.order == q)
