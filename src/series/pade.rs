@@ -11,6 +11,10 @@
 //! with D_m(a) = 1 + sum_{i=1}^{m} d_i a^i.
 
 use crate::linalg::{dot, norm};
+use rayon::prelude::*;
+
+/// Unknowns from which the terms are orthogonalized on the pool's threads.
+const PARALLEL_LEN: usize = 4096;
 
 /// Relative size below which an orthogonalized term counts as dependent on
 /// the previous ones (its denominator coefficients would be noise).
@@ -70,36 +74,50 @@ impl Orthogonalized {
             return None;
         }
         let m = n - 1;
-        let mut basis: Vec<Vec<f64>> = Vec::with_capacity(m);
         let mut alpha = vec![vec![0.0; m]; n];
-        for k in 1..=n {
-            let mut w = terms[k].clone();
-            for j in 1..k.min(m + 1) {
-                let a = dot_interleaved(&w, &basis[j - 1]);
-                alpha[k - 1][j - 1] = a;
-                // Modified Gram-Schmidt: subtract as we go.
-                for (wi, bi) in w.iter_mut().zip(&basis[j - 1]) {
+        // Right-looking: once w*_k is formed, it is taken off every later
+        // term at once. Each term meets w*_1, w*_2, … in order, each time
+        // in its current state: the same operations as term by term, so
+        // the same bits, but the later terms are independent of each other
+        // (on 2 threads from PARALLEL_LEN unknowns: the orthogonalization
+        // cost ~1.2 ms per step on one at 12,600 unknowns, N = 15).
+        let mut w: Vec<Vec<f64>> = terms[1..=n].to_vec();
+        for k in 1..=m {
+            let nk = norm_interleaved(&w[k - 1]);
+            if !(nk > DEPENDENT * norm_interleaved(&terms[k])) {
+                // W_k is (numerically) in the span of W_1..W_{k-1}: build
+                // the approximant from W_1..W_k instead, whose W_k is
+                // then exactly represented by the basis.
+                return if k >= 3 && k < n {
+                    alpha.truncate(k);
+                    for row in &mut alpha {
+                        row.truncate(k - 1);
+                    }
+                    Some(Self { alpha, n: k })
+                } else {
+                    None
+                };
+            }
+            alpha[k - 1][k - 1] = nk;
+            let (done, later) = w.split_at_mut(k);
+            let basis = &mut done[k - 1];
+            for x in basis.iter_mut() {
+                *x /= nk;
+            }
+            let basis = &*basis;
+            // Modified Gram-Schmidt: a = <W_l, w*_k>, then W_l −= a w*_k.
+            let take_off = |(wl, row): (&mut Vec<f64>, &mut Vec<f64>)| {
+                let a = dot_interleaved(wl, basis);
+                row[k - 1] = a;
+                for (wi, bi) in wl.iter_mut().zip(basis) {
                     *wi -= a * bi;
                 }
-            }
-            if k <= m {
-                let nk = norm_interleaved(&w);
-                if !(nk > DEPENDENT * norm_interleaved(&terms[k])) {
-                    // W_k is (numerically) in the span of W_1..W_{k-1}: build
-                    // the approximant from W_1..W_k instead, whose W_k is
-                    // then exactly represented by the basis.
-                    return if k >= 3 && k < n {
-                        alpha.truncate(k);
-                        for row in &mut alpha {
-                            row.truncate(k - 1);
-                        }
-                        Some(Self { alpha, n: k })
-                    } else {
-                        None
-                    };
-                }
-                alpha[k - 1][k - 1] = nk;
-                basis.push(w.iter().map(|x| x / nk).collect());
+            };
+            let rows = &mut alpha[k..];
+            if basis.len() >= PARALLEL_LEN {
+                later.par_iter_mut().zip(rows).for_each(take_off);
+            } else {
+                later.iter_mut().zip(rows).for_each(take_off);
             }
         }
         Some(Self { alpha, n })
