@@ -148,6 +148,10 @@ pub struct ShellElement {
     /// [`ShellElement::packed_geometric`]), stored symmetric; one copy for
     /// all congruent elements (geometric_map::share).
     kmap: Arc<GeometricMap>,
+    /// Whether other elements hold the same map (set by
+    /// [`ShellElement::set_map`]): the series then read it unpacked, once
+    /// per run of elements ([`ShellElement::packed_geometric_pair`]).
+    map_shared: bool,
 }
 
 fn to_vec(m: &Matrix3<f64>) -> [f64; 6] {
@@ -274,6 +278,7 @@ impl ShellElement {
             hinv,
             moments: (thickness, thickness * thickness * thickness / 12.0),
             kmap: placeholder_map(),
+            map_shared: false,
         };
         let map = GeometricMap::from_full(&el.geometric_map());
         Ok((el, map))
@@ -318,8 +323,11 @@ impl ShellElement {
         &self.kmap
     }
 
-    /// Replaces the map by an equal one (geometric_map::share).
+    /// Replaces the map by an equal one (geometric_map::share), shared
+    /// when other holders of it exist now: its other elements, placed
+    /// before or still to be placed.
     pub fn set_map(&mut self, map: Arc<GeometricMap>) {
+        self.map_shared = Arc::strong_count(&map) > 1;
         self.kmap = map;
     }
 
@@ -355,7 +363,7 @@ impl ShellElement {
         // unstructured mesh) would be unpacked for every element and order,
         // which costs more than the packed sums (measured: 3.2 → 3.6 µs per
         // element and order, 16,000 elements streamed).
-        if Arc::strong_count(&self.kmap) == 1 {
+        if !self.map_shared {
             return self.kmap.apply_pair(a, b);
         }
         let k = self.full_map(cache).as_slice();
