@@ -148,9 +148,10 @@ pub struct ShellModel {
     structure: Option<Arc<Structure>>,
     slots: Vec<ElementSlots>,
     /// Per contact pair, the slots of its node's translation rows in the
-    /// node's three translation columns (each a run of 3 slots), built with
-    /// `slots`; NO_SLOT where the node has a fixed translation or the slot
-    /// does not fit 32 bits (the assembly searches then).
+    /// node's three translation columns (each a run of 3 slots), found with
+    /// the pattern and again when the pairs change; NO_SLOT where the node
+    /// has a fixed translation or the slot does not fit 32 bits (the
+    /// assembly searches then).
     pair_slots: Vec<[u32; 3]>,
     /// Series orders a step computes (ContinuationProblem::reserve_orders):
     /// the series buffers are sized for them at the step start, so that
@@ -269,6 +270,7 @@ impl ShellModel {
         distance: f64,
     ) -> std::result::Result<(), (usize, usize, f64)> {
         self.pairs = search::pairs(nodes, &self.x0, &obstacles, k, eta)?;
+        self.pair_slots.clear();
         self.motions = vec![Motion::Fixed; obstacles.len()];
         self.obstacles = obstacles;
         self.search_distance = distance;
@@ -290,6 +292,7 @@ impl ShellModel {
             }
         }
         self.pairs.retain(|p| nearest[&p.node].0 == p.obstacle);
+        self.pair_slots.clear();
         self.active = search::active(&self.pairs, &self.x0, &self.obstacles, self.search_distance);
     }
 
@@ -1091,15 +1094,18 @@ impl ContinuationProblem for ShellModel {
                     .map(|e| element_slots(&s, &e.nodes, &self.free))
                     .collect::<Option<_>>()
                     .unwrap_or_default();
-                self.pair_slots = self
-                    .pairs
-                    .iter()
-                    .map(|p| Self::translation_slots(&s, &self.free, p.node))
-                    .collect();
                 self.structure = Some(Arc::clone(&s));
                 s
             }
         };
+        // Found with the pattern, again after the pairs change.
+        if self.pair_slots.len() != self.pairs.len() {
+            self.pair_slots = self
+                .pairs
+                .iter()
+                .map(|p| Self::translation_slots(&structure, &self.free, p.node))
+                .collect();
+        }
         let mut k = SparseMatrix::with_structure(structure);
         // dR/dlambda on the full dofs: −F, the follower couples' −m × a3,
         // and for a fixed dof j held at lambda p_j the column K_ij p_j.
