@@ -25,8 +25,10 @@
 
 use super::normal::NormalLaw;
 
-/// The series of y = c ln(R + eta) of one contact pair along a step.
-#[derive(Clone, Debug)]
+/// The series of y = c ln(R + eta) of one contact pair along a step
+/// (`Default`: the coordinate off, no order yet; [`LogReaction::restart`]
+/// starts it).
+#[derive(Clone, Debug, Default)]
 pub struct LogReaction {
     /// c; 0 where rho_0 <= 0 (a law with delta <= 0 away from contact),
     /// which makes the coordinate constant.
@@ -42,12 +44,7 @@ pub struct LogReaction {
 impl LogReaction {
     /// Order 0 at gap h0 with reaction r0 = law.force(h0), weight c >= 0.
     pub fn start(c: f64, law: &NormalLaw, h0: f64, r0: f64, orders: usize) -> Self {
-        let mut series = Self {
-            c: 0.0,
-            inv_rho0: 0.0,
-            dy_dh: 0.0,
-            y: Vec::with_capacity(orders),
-        };
+        let mut series = Self::default();
         series.restart(c, law, h0, r0, orders);
         series
     }

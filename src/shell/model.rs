@@ -867,7 +867,7 @@ impl ShellModel {
                     pair: ip,
                     gap,
                     r: Vec::with_capacity(self.orders),
-                    log_r: LogReaction::start(0.0, &pair.law, 0.0, 0.0, self.orders),
+                    log_r: LogReaction::default(),
                     y_star: 0.0,
                 });
                 series.last_mut().expect("pushed")
