@@ -67,6 +67,7 @@ impl LogReaction {
     /// Prefetches the coefficients (fe::prefetch).
     pub fn prefetch(&self) {
         crate::fe::prefetch::prefetch(&self.y);
+        crate::fe::prefetch::prefetch_spare(&self.y, 1);
     }
 
     /// y_m from r = R_0..R_m, m = the next order (pushed).

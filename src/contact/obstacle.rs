@@ -24,7 +24,7 @@
 // Node/dof/component loops read better with explicit indices.
 #![allow(clippy::needless_range_loop)]
 
-use crate::fe::prefetch::prefetch;
+use crate::fe::prefetch::{prefetch, prefetch_spare};
 use crate::series::taylor::{div_coeff, sqrt_coeff};
 use nalgebra::{Matrix3, Vector3};
 
@@ -334,9 +334,11 @@ impl GapSeries {
     pub fn prefetch(&self) {
         for list in self.y.iter().chain(&self.n) {
             prefetch(list);
+            prefetch_spare(list, 1);
         }
         for list in [&self.d2, &self.d, &self.s, &self.h] {
             prefetch(list);
+            prefetch_spare(list, 1);
         }
     }
 

@@ -20,7 +20,13 @@ use super::stats::{Stats, charge};
 use super::stop::Stop;
 use crate::error::{Error, Result};
 use crate::linalg::{Choice, Factorization, LinearSolver, SparseMatrix};
+use std::sync::atomic::AtomicBool;
 use std::time::Instant;
+
+/// Work toward the next series order, run during a solve
+/// ([`ContinuationProblem::rhs_prepass`]); its argument is set once the
+/// solve is done.
+pub type Prepass<'a> = Box<dyn FnOnce(&AtomicBool) + Send + 'a>;
 
 /// What a static problem supplies to the engine.
 pub trait ContinuationProblem {
@@ -39,8 +45,10 @@ pub trait ContinuationProblem {
     /// for order p − 1: the engine starts it after `series_rhs(p − 1, ..)`
     /// and waits for it before `series_rhs(p, ..)`, and the problem is not
     /// touched meanwhile. A job that was not run, or was run for another
-    /// order, must leave `series_rhs` correct.
-    fn rhs_prepass(&mut self, _p: usize) -> Option<Box<dyn FnOnce() + Send + '_>> {
+    /// order, must leave `series_rhs` correct. The engine sets `done` when
+    /// its solve is over: the job may stop there and leave the rest to
+    /// `series_rhs` (which runs on every thread).
+    fn rhs_prepass(&mut self, _p: usize) -> Option<Prepass<'_>> {
         None
     }
     /// Characteristic magnitude s_i of each unknown (default: all 1.0): e.g.

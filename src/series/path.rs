@@ -58,6 +58,7 @@ use super::stop::Stop;
 use crate::error::{Error, Result};
 use crate::linalg::{Factorization, LinearSolver, dot, norm};
 use serde::{Deserialize, Serialize};
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 /// The state after an accepted step: enough to resume the path exactly
@@ -408,9 +409,13 @@ pub(crate) fn series_step<P: ContinuationProblem + ?Sized>(
             Some(job) => {
                 let t = Instant::now();
                 let solve_before = stats.solve_s;
+                let done = AtomicBool::new(false);
                 let ub = rayon::in_place_scope(|s| {
-                    s.spawn(move |_| job());
-                    solve(&rhs, stats, "order-p")
+                    let done = &done;
+                    s.spawn(move |_| job(done));
+                    let ub = solve(&rhs, stats, "order-p");
+                    done.store(true, Ordering::Relaxed);
+                    ub
                 });
                 stats.series_s += t.elapsed().as_secs_f64() - (stats.solve_s - solve_before);
                 ub?

@@ -44,7 +44,7 @@ use crate::contact::search::{self, ContactPair};
 use crate::error::{Error, Result};
 use crate::fe::dof::{Dof, PER_NODE, index as dof};
 use crate::fe::pattern::{ElementSlots, NO_SLOT, element_slots, node_block_structure};
-use crate::fe::prefetch::prefetch;
+use crate::fe::prefetch::{prefetch, prefetch_spare};
 use crate::fe::surface_load;
 use crate::linalg::{ColumnBlock, SparseMatrix, Structure};
 use rayon::prelude::*;
@@ -61,7 +61,8 @@ const PAR_MIN: usize = 256;
 /// solves ([`ContinuationProblem::rhs_prepass`]).
 const PREPASS_MIN_ELEMENTS: usize = 1000;
 use crate::series::ContinuationProblem;
-use crate::series::continuation::ArcCoordinates;
+use crate::series::continuation::{ArcCoordinates, Prepass};
+use std::sync::atomic::{AtomicBool, Ordering};
 
 /// A follower couple at a node: director force λ (moment × a3).
 #[derive(Clone, Debug)]
@@ -142,6 +143,8 @@ pub struct ShellModel {
     distinct_maps: usize,
     /// The full state of the last residual and each element's Kg_0 there.
     state_kg: (Vec<f64>, Vec<PackedSym>),
+    /// The order whose inner terms a job was handed (rhs_prepass).
+    prepass_order: Option<usize>,
     /// The tangent's pattern (element connectivity of the free dofs), built
     /// on the first tangent after the constraints are set, with each
     /// element's slots in it (empty if they do not fit 32 bits).
@@ -222,6 +225,7 @@ impl ShellModel {
             pair_series: vec![],
             distinct_maps,
             state_kg: (vec![], vec![]),
+            prepass_order: None,
             structure: None,
             slots: Vec::new(),
             pair_slots: Vec::new(),
@@ -523,7 +527,10 @@ impl ShellModel {
                 .zip(kgs.par_chunks_mut(PAR_MIN))
                 .zip(elements)
                 .for_each(|((out, kg_out), chunk)| {
-                    for ((f, kg), e) in out.iter_mut().zip(kg_out).zip(chunk) {
+                    for (i, ((f, kg), e)) in out.iter_mut().zip(kg_out).zip(chunk).enumerate() {
+                        if let Some(next) = chunk.get(i + 1) {
+                            next.prefetch_state();
+                        }
                         let (x, d) = self.element_state(e, full, false);
                         (*f, *kg) = e.internal_and_geometric(&x, &d);
                     }
@@ -533,7 +540,10 @@ impl ShellModel {
                 .par_chunks_mut(PAR_MIN)
                 .zip(elements)
                 .for_each(|(out, chunk)| {
-                    for (f, e) in out.iter_mut().zip(chunk) {
+                    for (i, (f, e)) in out.iter_mut().zip(chunk).enumerate() {
+                        if let Some(next) = chunk.get(i + 1) {
+                            next.prefetch_state();
+                        }
                         let (x, d) = self.element_state(e, full, false);
                         *f = e.internal(&x, &d);
                     }
@@ -966,6 +976,7 @@ impl PairSeries {
     fn prefetch(&self) {
         self.gap.prefetch();
         prefetch(&self.r);
+        prefetch_spare(&self.r, 1);
         self.log_r.prefetch();
     }
 }
@@ -1256,13 +1267,20 @@ impl ContinuationProblem for ShellModel {
     /// on one thread, while order p − 1 is solved on another: on large
     /// models the solve is sequential and the elements stream their series
     /// from memory, so the two overlap.
-    fn rhs_prepass(&mut self, p: usize) -> Option<Box<dyn FnOnce() + Send + '_>> {
+    /// Where the solve ends first, the job stops and the series' pass
+    /// prepares the elements it did not reach (on both threads): the same
+    /// terms, summed in the same order.
+    fn rhs_prepass(&mut self, p: usize) -> Option<Prepass<'_>> {
         if p < 4 || self.el_series.len() < PREPASS_MIN_ELEMENTS {
             return None;
         }
+        self.prepass_order = Some(p);
         let series = &mut self.el_series;
-        Some(Box::new(move || {
+        Some(Box::new(move |done: &AtomicBool| {
             for i in 0..series.len() {
+                if done.load(Ordering::Relaxed) {
+                    break;
+                }
                 if let Some(after) = series.get(i + 2) {
                     after.prefetch_record();
                 }
@@ -1297,6 +1315,9 @@ impl ContinuationProblem for ShellModel {
         let (elements, el_series) = (&self.elements, &mut self.el_series);
         let (pairs, motions, pair_series) = (&self.pairs, &self.motions, &mut self.pair_series);
         let lm = lambda[p - 1];
+        // Inner terms of order p were asked for: where the job stopped
+        // before an element, they are computed here.
+        let prepared = self.prepass_order.take() == Some(p);
         // The elements and the contact pairs at once: the threads that
         // finish one take work from the other.
         rayon::join(
@@ -1322,6 +1343,9 @@ impl ContinuationProblem for ShellModel {
                                 }
                             }
                             let e = &elements[i];
+                            if prepared && !series[i].has_ahead(p) {
+                                series[i].prepare(p);
+                            }
                             let (x, d) = Self::element_coefficients(e, &full);
                             out[i] = series[i].complete_and_rhs(e, &x, &d, &mut cache);
                         }

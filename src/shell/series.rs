@@ -28,7 +28,7 @@ use super::kinematics::{
     NCOL, NDOF_EL, NDOF_Y, NSYM, NodalVectors, PackedSym, SYM_INDEX, SYM_PAIRS, Vec3, YMatrix,
     element_force, element_matrix, nodal_vectors, pack,
 };
-use crate::fe::prefetch::prefetch;
+use crate::fe::prefetch::{prefetch, prefetch_spare};
 
 /// Series of one element over an ANM step: nodal vectors and geometric
 /// stiffnesses of every complete order.
@@ -175,6 +175,8 @@ impl ElementSeries {
     pub fn prefetch_outer(&self, e: &ShellElement) {
         prefetch(&self.y[..2.min(self.y.len())]);
         prefetch(&self.kg[..2.min(self.kg.len())]);
+        prefetch_spare(&self.y, 1);
+        prefetch_spare(&self.kg, 1);
         if let Some(a) = &self.ahead {
             prefetch(std::slice::from_ref(a));
         }
@@ -207,6 +209,8 @@ impl ElementSeries {
     pub fn prefetch(&self, e: &ShellElement) {
         prefetch(&self.y);
         prefetch(&self.kg);
+        prefetch_spare(&self.y, 1);
+        prefetch_spare(&self.kg, 1);
         e.prefetch_map();
     }
 

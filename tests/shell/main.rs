@@ -11,6 +11,7 @@ mod membrane_stress;
 mod nonlinear_cantilevers;
 mod patch_macneal_harder;
 mod plate_buckling_dolfinx;
+mod prepass;
 mod sheet_wrinkling_dolfinx;
 mod step_cost;
 mod strip_wrinkling;
