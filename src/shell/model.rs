@@ -806,17 +806,25 @@ impl ShellModel {
                 .then_some(&self.state_kg.1);
             let mut series = std::mem::take(&mut self.el_series);
             series
-                .par_iter_mut()
+                .par_chunks_mut(PAR_MIN)
+                .zip(self.elements.par_chunks(PAR_MIN))
                 .enumerate()
-                .zip(self.elements.par_iter())
-                .with_min_len(PAR_MIN)
-                .for_each(|((i, st), e)| {
-                    let (x, d) = self.element_state(e, &full, false);
-                    match kept {
-                        Some(kg) => st.restart_with(&x, &d, kg[i]),
-                        None => st.restart(e, &x, &d),
+                .for_each(|(c, (series, elements))| {
+                    for (k, e) in elements.iter().enumerate() {
+                        // The next element's record and first orders, which
+                        // the solves have evicted since the last step.
+                        if let (Some(next), Some(ne)) = (series.get(k + 1), elements.get(k + 1)) {
+                            next.prefetch_start();
+                            ne.prefetch_record();
+                        }
+                        let st = &mut series[k];
+                        let (x, d) = self.element_state(e, &full, false);
+                        match kept {
+                            Some(kg) => st.restart_with(&x, &d, kg[c * PAR_MIN + k]),
+                            None => st.restart(e, &x, &d),
+                        }
+                        st.reserve(self.orders);
                     }
-                    st.reserve(self.orders);
                 });
             self.el_series = series;
         } else {
@@ -832,8 +840,9 @@ impl ShellModel {
                 })
                 .collect();
         }
-        // One thread: built on the pool's threads, the pairs' series (0.3 GB
-        // of small blocks at a million unknowns) raised the peak by 0.5 GB.
+        // Built on one thread: built on the pool's threads, the pairs' series
+        // (0.3 GB of small blocks at a million unknowns) raised the peak by
+        // 0.5 GB; restarted in place, they allocate nothing (both threads).
         // Restarted in the last step's buffers while the active pairs are
         // the same: 12 small blocks per pair allocated and released per step
         // cost 1.3 ms of the 2,115-pair strip's ~75 ms step (140×14).
@@ -861,42 +870,66 @@ impl ShellModel {
         full: &[f64],
         obstacles: &[Obstacle],
     ) -> Result<()> {
-        for (k, &ip) in self.active.iter().enumerate() {
+        let position = |ip: usize| {
+            let node = self.pairs[ip].node;
+            self.x0[node] + Self::vec3(full, node, 0)
+        };
+        let gap_error = |ip: usize| self.gap_error(self.pairs[ip].node, f64::NAN);
+        if in_place {
+            // In the last step's buffers, on every thread (no allocation);
+            // the first pair in order whose gap is undefined is reported.
+            let failed = series
+                .par_iter_mut()
+                .enumerate()
+                .with_min_len(PAR_MIN)
+                .filter_map(|(k, ps)| {
+                    let pair = &self.pairs[ps.pair];
+                    if ps
+                        .gap
+                        .restart(&obstacles[pair.obstacle], &position(ps.pair))
+                        .is_none()
+                    {
+                        return Some(k);
+                    }
+                    ps.r.clear();
+                    self.restart_reaction(ps);
+                    None
+                })
+                .min();
+            return failed.map_or(Ok(()), |k| Err(gap_error(series[k].pair)));
+        }
+        for &ip in &self.active {
             let pair = &self.pairs[ip];
-            let x = self.x0[pair.node] + Self::vec3(full, pair.node, 0);
-            let obstacle = &obstacles[pair.obstacle];
-            let gap_error = || self.gap_error(pair.node, f64::NAN);
-            let ps = if in_place {
-                let ps = &mut series[k];
-                ps.gap.restart(obstacle, &x).ok_or_else(gap_error)?;
-                ps.r.clear();
-                ps
-            } else {
-                let gap = GapSeries::start(obstacle, &x).ok_or_else(gap_error)?;
-                series.push(PairSeries {
-                    pair: ip,
-                    gap,
-                    r: Vec::with_capacity(self.orders),
-                    log_r: LogReaction::default(),
-                    y_star: 0.0,
-                });
-                series.last_mut().expect("pushed")
-            };
-            // Orders 0 … N − 1 completed, and the starred order N pushed by
-            // the last right-hand side: N + 1 = self.orders.
-            ps.gap.reserve(self.orders);
-            ps.r.reserve(self.orders);
-            ps.r.push(pair.law.force(ps.gap.h[0]));
-            ps.log_r.restart(
-                self.contact_arclength,
-                &pair.law,
-                ps.gap.h[0],
-                ps.r[0],
-                self.orders,
-            );
-            ps.y_star = 0.0;
+            let gap = GapSeries::start(&obstacles[pair.obstacle], &position(ip))
+                .ok_or_else(|| gap_error(ip))?;
+            series.push(PairSeries {
+                pair: ip,
+                gap,
+                r: Vec::with_capacity(self.orders),
+                log_r: LogReaction::default(),
+                y_star: 0.0,
+            });
+            self.restart_reaction(series.last_mut().expect("pushed"));
         }
         Ok(())
+    }
+
+    /// A pair's reaction series from its restarted gap: order 0, room for
+    /// orders 0 … N − 1 completed and the starred order N pushed by the
+    /// last right-hand side (N + 1 = self.orders).
+    fn restart_reaction(&self, ps: &mut PairSeries) {
+        let pair = &self.pairs[ps.pair];
+        ps.gap.reserve(self.orders);
+        ps.r.reserve(self.orders);
+        ps.r.push(pair.law.force(ps.gap.h[0]));
+        ps.log_r.restart(
+            self.contact_arclength,
+            &pair.law,
+            ps.gap.h[0],
+            ps.r[0],
+            self.orders,
+        );
+        ps.y_star = 0.0;
     }
 
     /// Completes order m from (u_m, lambda_m): fixed dofs move by

@@ -190,6 +190,14 @@ impl ElementSeries {
         prefetch(&self.kg);
     }
 
+    /// Prefetches what [`ElementSeries::restart_with`] writes: the record
+    /// and the first slots of the orders.
+    pub fn prefetch_start(&self) {
+        prefetch(std::slice::from_ref(self));
+        prefetch(&self.y[..1.min(self.y.len())]);
+        prefetch(&self.kg[..1.min(self.kg.len())]);
+    }
+
     /// Prefetches the series' own record (the headers of its orders and
     /// the inner terms): one element before [`ElementSeries::prefetch`] or
     /// [`ElementSeries::prefetch_outer`], which read those headers to find
