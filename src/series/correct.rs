@@ -125,6 +125,14 @@ impl Metric {
         }
     }
 
+    /// Appends ũ = u / s to `out` (the values of [`Metric::u`]).
+    pub fn extend_scaled(&self, x: &[f64], out: &mut Vec<f64>) {
+        match &self.inv_u {
+            None => out.extend_from_slice(x),
+            Some(w) => out.extend(x.iter().zip(w).map(|(a, w)| a * w)),
+        }
+    }
+
     /// λ̃ = lambda / Lambda.
     pub fn l(&self, x: f64) -> f64 {
         x * self.inv_l
@@ -172,19 +180,6 @@ impl Metric {
     /// The weight of the load parameter in the inner product, 1/Lambda^2.
     pub fn lambda_weight(&self) -> f64 {
         self.inv_l * self.inv_l
-    }
-
-    /// Stacked scaled terms (Ũ_p, λ̃_p), p = 0..N: what norms, Padé and the
-    /// geometric-series test read.
-    pub fn stack(&self, u: &[Vec<f64>], lambda: &[f64]) -> Vec<Vec<f64>> {
-        u.iter()
-            .zip(lambda)
-            .map(|(up, &lp)| {
-                let mut t = self.u(up).into_owned();
-                t.push(self.l(lp));
-                t
-            })
-            .collect()
     }
 }
 

@@ -57,6 +57,7 @@ use super::stats::{Stats, charge};
 use super::stop::Stop;
 use crate::error::{Error, Result};
 use crate::linalg::{Factorization, LinearSolver, dot, norm};
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
@@ -288,13 +289,20 @@ const EARLY_KINK_ORDERS: [usize; 3] = [3, 6, 10];
 /// kinks; with the smaller one: 168, and 1,099 solves instead of 2,979).
 const EARLY_KINK_REACH: f64 = 0.25;
 
-/// The scaled terms T̃_p = (Ũ_p, λ̃_p, y_p) of orders 0..=p.
+/// The scaled terms T̃_p = (Ũ_p, λ̃_p, y_p) of orders 0..=p, each written
+/// once into its own buffer, the orders on every thread.
 fn stacked(metric: &Metric, us: &[Vec<f64>], ls: &[f64], ys: &[Vec<f64>]) -> Vec<Vec<f64>> {
-    let mut terms = metric.stack(us, ls);
-    for (t, y) in terms.iter_mut().zip(ys) {
-        t.extend_from_slice(y);
-    }
-    terms
+    us.par_iter()
+        .zip(ls)
+        .zip(ys)
+        .map(|((u, &l), y)| {
+            let mut t = Vec::with_capacity(u.len() + 1 + y.len());
+            metric.extend_scaled(u, &mut t);
+            t.push(metric.l(l));
+            t.extend_from_slice(y);
+            t
+        })
+        .collect()
 }
 
 /// Ratio rule (eq. L) on the scaled terms of orders 0..=N:
