@@ -66,8 +66,7 @@ impl LogReaction {
 
     /// Prefetches the coefficients (fe::prefetch).
     pub fn prefetch(&self) {
-        crate::fe::prefetch::prefetch(&self.y);
-        crate::fe::prefetch::prefetch_spare(&self.y, 1);
+        crate::fe::prefetch::prefetch_growing(&self.y);
     }
 
     /// y_m from r = R_0..R_m, m = the next order (pushed).

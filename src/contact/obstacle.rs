@@ -24,7 +24,7 @@
 // Node/dof/component loops read better with explicit indices.
 #![allow(clippy::needless_range_loop)]
 
-use crate::fe::prefetch::{prefetch, prefetch_spare};
+use crate::fe::prefetch::prefetch_growing;
 use crate::series::taylor::{div_coeff, sqrt_coeff};
 use nalgebra::{Matrix3, Vector3};
 
@@ -333,12 +333,10 @@ impl GapSeries {
     /// are small blocks scattered over the heap, each a cache miss.
     pub fn prefetch(&self) {
         for list in self.y.iter().chain(&self.n) {
-            prefetch(list);
-            prefetch_spare(list, 1);
+            prefetch_growing(list);
         }
         for list in [&self.d2, &self.d, &self.s, &self.h] {
-            prefetch(list);
-            prefetch_spare(list, 1);
+            prefetch_growing(list);
         }
     }
 

@@ -23,6 +23,13 @@ pub fn prefetch_spare<T>(v: &Vec<T>, n: usize) {
     );
 }
 
+/// A growing list: its values and the slot of its next push.
+#[inline(always)]
+pub fn prefetch_growing<T>(v: &Vec<T>) {
+    prefetch(v);
+    prefetch_spare(v, 1);
+}
+
 /// Every 64-byte line of `len` bytes from `start`.
 #[inline(always)]
 fn prefetch_bytes(start: *const i8, len: usize) {

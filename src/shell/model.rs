@@ -44,7 +44,7 @@ use crate::contact::search::{self, ContactPair};
 use crate::error::{Error, Result};
 use crate::fe::dof::{Dof, PER_NODE, index as dof};
 use crate::fe::pattern::{ElementSlots, NO_SLOT, element_slots, node_block_structure};
-use crate::fe::prefetch::{prefetch, prefetch_spare};
+use crate::fe::prefetch::prefetch_growing;
 use crate::fe::surface_load;
 use crate::linalg::{ColumnBlock, SparseMatrix, Structure};
 use rayon::prelude::*;
@@ -840,12 +840,12 @@ impl ShellModel {
                 })
                 .collect();
         }
-        // Built on one thread: built on the pool's threads, the pairs' series
-        // (0.3 GB of small blocks at a million unknowns) raised the peak by
-        // 0.5 GB; restarted in place, they allocate nothing (both threads).
         // Restarted in the last step's buffers while the active pairs are
-        // the same: 12 small blocks per pair allocated and released per step
-        // cost 1.3 ms of the 2,115-pair strip's ~75 ms step (140×14).
+        // the same, on both threads (no allocation): 12 small blocks per pair
+        // allocated and released per step cost 1.3 ms of the 2,115-pair
+        // strip's ~75 ms step (140×14). New series are built on one thread:
+        // built on the pool's threads, they (0.3 GB of small blocks at a
+        // million unknowns) raised the peak by 0.5 GB.
         let mut series = std::mem::take(&mut self.pair_series);
         let in_place = series.len() == self.active.len()
             && series
@@ -1008,8 +1008,7 @@ impl PairSeries {
     /// Prefetches the pair's series (fe::prefetch).
     fn prefetch(&self) {
         self.gap.prefetch();
-        prefetch(&self.r);
-        prefetch_spare(&self.r, 1);
+        prefetch_growing(&self.r);
         self.log_r.prefetch();
     }
 }

@@ -28,7 +28,7 @@ use super::kinematics::{
     NCOL, NDOF_EL, NDOF_Y, NSYM, NodalVectors, PackedSym, SYM_INDEX, SYM_PAIRS, Vec3, YMatrix,
     element_force, element_matrix, nodal_vectors, pack,
 };
-use crate::fe::prefetch::{prefetch, prefetch_spare};
+use crate::fe::prefetch::{prefetch, prefetch_growing, prefetch_spare};
 
 /// Series of one element over an ANM step: nodal vectors and geometric
 /// stiffnesses of every complete order.
@@ -193,7 +193,7 @@ impl ElementSeries {
     /// Prefetches what [`ElementSeries::restart_with`] writes: the record
     /// and the first slots of the orders.
     pub fn prefetch_start(&self) {
-        prefetch(std::slice::from_ref(self));
+        self.prefetch_record();
         prefetch(&self.y[..1.min(self.y.len())]);
         prefetch(&self.kg[..1.min(self.kg.len())]);
     }
@@ -215,10 +215,8 @@ impl ElementSeries {
     /// Prefetches the series' data and the element's map (fe::prefetch):
     /// what [`ElementSeries::complete_and_rhs`] reads.
     pub fn prefetch(&self, e: &ShellElement) {
-        prefetch(&self.y);
-        prefetch(&self.kg);
-        prefetch_spare(&self.y, 1);
-        prefetch_spare(&self.kg, 1);
+        prefetch_growing(&self.y);
+        prefetch_growing(&self.kg);
         e.prefetch_map();
     }
 
