@@ -12,10 +12,13 @@
 //! Numerical Algorithms*, 2002, eq. 7.23), and a backend whose η exceeds
 //! [`BACKWARD_ERROR_LIMIT`] (LDLᵀ without pivoting meeting a tiny pivot on an
 //! indefinite tangent) hands over to the next: LDLᵀ → LBLᵀ (Bunch–Kaufman
-//! inside supernodes) → LU. The check costs one solve and two products with
-//! A per factorization.
+//! inside supernodes) → LU. The check costs one solve (the caller's own
+//! first solve where it hands its right-hand side to
+//! [`LinearSolver::factorize_solve`]) and one product with A; the checks on
+//! the values (finite, symmetric, the row sums of |A|) run on another thread
+//! beside the sequential factorization.
 
-use std::sync::Arc;
+use std::sync::{Arc, Mutex, Weak};
 use std::time::Instant;
 
 use faer::Par;
@@ -165,6 +168,8 @@ pub struct LinearSolver {
     #[cfg(feature = "mumps")]
     mumps: Option<Arc<std::sync::Mutex<mumps_backend::Instance>>>,
     stats: SolverStats,
+    /// The backend of the last accepted factorization on this pattern.
+    last: Option<Backend>,
 }
 
 impl Default for LinearSolver {
@@ -192,6 +197,8 @@ pub struct Factorization {
     inertia: Option<(usize, usize, usize)>,
     /// Seconds of the numeric factorization alone (no analysis, no check).
     numeric_s: f64,
+    /// Seconds of the solve that tested it.
+    test_solve_s: f64,
     mumps_memory_mb: Option<(f64, f64, f64)>,
 }
 
@@ -208,6 +215,7 @@ impl LinearSolver {
             #[cfg(feature = "mumps")]
             mumps: None,
             stats: SolverStats::default(),
+            last: None,
         }
     }
 
@@ -228,28 +236,72 @@ impl LinearSolver {
     /// Factorizes `a`, trying the backends of the choice in turn. Returns a
     /// message describing the failure, for the caller to wrap with step and
     /// lambda.
+    ///
+    /// The factorization is sequential and the checks on the values
+    /// (finite, symmetric, the product and row sums of the backward-error
+    /// test) do not need it: after the first factorization they run on
+    /// another thread while the backend that factorized the last tangent
+    /// factorizes this one; if the checks then choose another backend, that
+    /// factor is dropped and the choice runs as without the guess.
     pub fn factorize(&mut self, a: &SparseMatrix) -> Result<Factorization, String> {
+        self.factorize_checked(a, None).map(|(f, _)| f)
+    }
+
+    /// [`LinearSolver::factorize`] and the solve of A x = b, which is the
+    /// backward-error test of the factorization (in place of the fixed
+    /// vector's solve: one solve less). A zero or non-finite b is no test;
+    /// the fixed vector is then solved too.
+    pub fn factorize_solve(
+        &mut self,
+        a: &SparseMatrix,
+        b: &[f64],
+    ) -> Result<(Factorization, Vec<f64>), String> {
+        let (f, x) = self.factorize_checked(a, Some(b))?;
+        let x = x.unwrap_or_else(|| f.solve(b));
+        Ok((f, x))
+    }
+
+    /// The factorization, and the solution of its test when `b` was the
+    /// test.
+    fn factorize_checked(
+        &mut self,
+        a: &SparseMatrix,
+        b: Option<&[f64]>,
+    ) -> Result<(Factorization, Option<Vec<f64>>), String> {
+        let b = b.filter(|b| b.iter().all(|v| v.is_finite()) && max_abs(b) > 0.0);
         let (s, values) = a.compressed(self.structure.as_ref())?;
         if self.structure.as_ref().map(|k| k.id()) != Some(s.id()) {
             self.structure = Some(Arc::clone(&s));
             self.symmetric = None;
             self.lu = None;
+            self.last = None;
             #[cfg(feature = "mumps")]
             {
                 self.mumps = None;
             }
         }
-        if let Some(k) = values.iter().position(|v| !v.is_finite()) {
+        let (guess, checks) = match self.last {
+            Some(backend) => {
+                let (f, checks) = rayon::join(
+                    || self.numeric(backend, &s, &values, backend.symmetric()),
+                    || Checks::of(&s, &values, b),
+                );
+                (Some((backend, f)), checks)
+            }
+            None => (None, Checks::of(&s, &values, b)),
+        };
+        if let Some(k) = checks.non_finite {
             let (r, c) = position(&s, k);
             return Err(format!("non-finite entry {} at ({r}, {c})", values[k]));
         }
         self.stats.matrix_entries = s.nnz();
-        let symmetric = is_symmetric(&s, &values);
+        let symmetric = checks.symmetric;
         let candidates: Vec<Backend> = match self.choice {
             Choice::Only(b) => vec![b],
             Choice::Auto if symmetric => Backend::ALL.to_vec(),
             Choice::Auto => vec![Backend::Lu],
         };
+        let mut guess = guess.filter(|(b, _)| Some(b) == candidates.first());
         let mut reasons = vec![];
         for backend in candidates {
             if backend.symmetric() && !symmetric {
@@ -259,12 +311,17 @@ impl LinearSolver {
                 ));
                 continue;
             }
-            match self.try_backend(backend, &s, &values, symmetric) {
-                Ok(f) if f.backward_error <= BACKWARD_ERROR_LIMIT => {
+            let factored = match guess.take() {
+                Some((_, f)) => f,
+                None => self.numeric(backend, &s, &values, symmetric),
+            };
+            match factored.map(|f| checks.checked(f, &s, &values)) {
+                Ok((f, x)) if f.backward_error <= BACKWARD_ERROR_LIMIT => {
                     self.stats.count(&f, reasons.len());
-                    return Ok(f);
+                    self.last = Some(backend);
+                    return Ok((f, b.map(|_| x)));
                 }
-                Ok(f) => reasons.push(format!(
+                Ok((f, _)) => reasons.push(format!(
                     "{}: backward error {:.1e} > {BACKWARD_ERROR_LIMIT:e}",
                     backend.name(),
                     f.backward_error
@@ -273,12 +330,15 @@ impl LinearSolver {
             }
         }
         self.stats.fallbacks += reasons.len();
+        self.last = None;
         Err(format!("no factorization passed: {}", reasons.join("; ")))
     }
 
-    // `symmetric` chooses the MUMPS analysis; the faer backends know theirs.
+    /// The numeric factorization by `backend` (and the pattern's analysis
+    /// the first time), not yet checked. `symmetric` chooses the MUMPS
+    /// analysis; the faer backends know theirs.
     #[cfg_attr(not(feature = "mumps"), allow(unused_variables))]
-    fn try_backend(
+    fn numeric(
         &mut self,
         backend: Backend,
         s: &Arc<Structure>,
@@ -308,8 +368,9 @@ impl LinearSolver {
             let (generation, memory, negative, entries) =
                 shared.lock().expect("MUMPS lock").factorize(values)?;
             self.stats.factor_entries = entries;
-            let mut f = Factorization {
+            let f = Factorization {
                 numeric_s: t.elapsed().as_secs_f64(),
+                test_solve_s: 0.0,
                 factor: Factor::Mumps(shared, generation),
                 par: self.par,
                 n: s.n(),
@@ -318,13 +379,17 @@ impl LinearSolver {
                 inertia: symmetric.then_some((negative, 0, s.n() - negative)),
                 mumps_memory_mb: Some(memory),
             };
-            f.backward_error = backward_error(&f, s, values);
             return Ok(f);
         }
         let factor = if backend.symmetric() {
             if self.symmetric.is_none() {
+                self.symmetric = shared_analysis(s);
+            }
+            if self.symmetric.is_none() {
                 let t = Instant::now();
-                self.symmetric = Some(Arc::new(SymmetricSymbolic::new(s)?));
+                let sym = Arc::new(SymmetricSymbolic::new(s)?);
+                share_analysis(s, &sym);
+                self.symmetric = Some(sym);
                 self.stats.analysis_s += t.elapsed().as_secs_f64();
                 self.stats.analyses += 1;
             }
@@ -335,7 +400,7 @@ impl LinearSolver {
             } else {
                 Pivoting::BunchKaufman
             };
-            let f = SymmetricFactor::new(&sym, s, values, pivoting, self.par)?;
+            let f = SymmetricFactor::new(&sym, values, pivoting, self.par)?;
             Factor::Symmetric(sym, f)
         } else {
             if self.lu.is_none() {
@@ -352,6 +417,7 @@ impl LinearSolver {
         analysis = self.stats.analysis_s - analysis;
         let mut f = Factorization {
             numeric_s: start.elapsed().as_secs_f64() - analysis,
+            test_solve_s: 0.0,
             factor,
             par: self.par,
             n: s.n(),
@@ -360,7 +426,6 @@ impl LinearSolver {
             inertia: None,
             mumps_memory_mb: None,
         };
-        f.backward_error = backward_error(&f, s, values);
         if let Factor::Symmetric(sym, sf) = &f.factor {
             f.inertia = Some(sf.inertia(sym));
         }
@@ -395,6 +460,11 @@ impl Factorization {
     /// Seconds of the numeric factorization (no analysis, no check).
     pub fn numeric_seconds(&self) -> f64 {
         self.numeric_s
+    }
+
+    /// Seconds of the solve that tested the factorization.
+    pub fn test_solve_seconds(&self) -> f64 {
+        self.test_solve_s
     }
 
     /// The backward error of the check solve.
@@ -467,6 +537,27 @@ mod mumps_backend {
     }
 }
 
+/// The symmetric analyses alive in this process, by pattern: the solvers of
+/// one run (the path's, its grid points', its events') factorize the same
+/// pattern, and one analysis serves them all (at a million unknowns it
+/// takes seconds and holds the permuted pattern, ~0.3 GB).
+static ANALYSES: Mutex<Vec<(u64, Weak<SymmetricSymbolic>)>> = Mutex::new(Vec::new());
+
+fn shared_analysis(s: &Structure) -> Option<Arc<SymmetricSymbolic>> {
+    let analyses = ANALYSES.lock().ok()?;
+    analyses
+        .iter()
+        .find(|(id, _)| *id == s.id())
+        .and_then(|(_, a)| a.upgrade())
+}
+
+fn share_analysis(s: &Structure, sym: &Arc<SymmetricSymbolic>) {
+    if let Ok(mut analyses) = ANALYSES.lock() {
+        analyses.retain(|(_, a)| a.strong_count() > 0);
+        analyses.push((s.id(), Arc::downgrade(sym)));
+    }
+}
+
 /// (row, col) of a slot.
 fn position(s: &Structure, k: usize) -> (usize, usize) {
     let c = s.col_ptr().partition_point(|&p| p <= k) - 1;
@@ -501,29 +592,88 @@ fn max_abs(v: &[f64]) -> f64 {
     v.iter().fold(0.0f64, |m, x| m.max(x.abs()))
 }
 
-/// Normwise backward error of the solve of A x = A x_ref, x_ref a fixed
-/// vector with entries in [1, 2) (NaN when the solve is not finite).
-fn backward_error(f: &Factorization, s: &Structure, values: &[f64]) -> f64 {
-    let n = s.n();
-    let x_ref: Vec<f64> = (0..n)
-        .map(|i| 1.0 + ((i * 7919) % 113) as f64 / 113.0)
-        .collect();
-    let b = mul(s, values, &x_ref);
-    let x = f.solve(&b);
-    if !x.iter().all(|v| v.is_finite()) {
-        return f64::NAN;
+/// What is checked on the values of a matrix, apart from its factor.
+struct Checks {
+    /// The first slot holding a non-finite value.
+    non_finite: Option<usize>,
+    /// [`is_symmetric`].
+    symmetric: bool,
+    /// The right-hand side of the backward-error test: the caller's, or
+    /// A x_ref, x_ref a fixed vector with entries in [1, 2).
+    b: Vec<f64>,
+    /// max_i Σ_j |a_ij|.
+    norm_inf: f64,
+}
+
+impl Checks {
+    fn of(s: &Structure, values: &[f64], b: Option<&[f64]>) -> Self {
+        let non_finite = values.iter().position(|v| !v.is_finite());
+        if non_finite.is_some() {
+            return Self {
+                non_finite,
+                symmetric: false,
+                b: vec![],
+                norm_inf: f64::NAN,
+            };
+        }
+        let n = s.n();
+        let mut row_sums = vec![0.0; n];
+        let b = match b {
+            Some(b) => {
+                for (&r, v) in s.row_idx().iter().zip(values) {
+                    row_sums[r] += v.abs();
+                }
+                b.to_vec()
+            }
+            None => {
+                let mut b = vec![0.0; n];
+                for c in 0..n {
+                    let xc = 1.0 + ((c * 7919) % 113) as f64 / 113.0;
+                    let col = s.col_ptr()[c]..s.col_ptr()[c + 1];
+                    for (&r, v) in s.row_idx()[col.clone()].iter().zip(&values[col]) {
+                        b[r] += v * xc;
+                        row_sums[r] += v.abs();
+                    }
+                }
+                b
+            }
+        };
+        Self {
+            non_finite,
+            symmetric: is_symmetric(s, values),
+            b,
+            norm_inf: max_abs(&row_sums),
+        }
     }
-    let ax = mul(s, values, &x);
-    let r = max_abs(&b.iter().zip(&ax).map(|(b, a)| b - a).collect::<Vec<_>>());
-    let mut row_sums = vec![0.0; n];
-    for (k, &r) in s.row_idx().iter().enumerate() {
-        row_sums[r] += values[k].abs();
-    }
-    let denominator = max_abs(&row_sums) * max_abs(&x) + max_abs(&b);
-    if denominator == 0.0 {
-        0.0
-    } else {
-        r / denominator
+
+    /// `f` with the normwise backward error of its solve of A x = b (NaN
+    /// when the solve is not finite), and x.
+    fn checked(
+        &self,
+        mut f: Factorization,
+        s: &Structure,
+        values: &[f64],
+    ) -> (Factorization, Vec<f64>) {
+        let t = Instant::now();
+        let x = f.solve(&self.b);
+        f.test_solve_s = t.elapsed().as_secs_f64();
+        f.backward_error = if !x.iter().all(|v| v.is_finite()) {
+            f64::NAN
+        } else {
+            let ax = mul(s, values, &x);
+            let r = self
+                .b
+                .iter()
+                .zip(&ax)
+                .fold(0.0f64, |m, (b, a)| m.max((b - a).abs()));
+            let denominator = self.norm_inf * max_abs(&x) + max_abs(&self.b);
+            if denominator == 0.0 {
+                0.0
+            } else {
+                r / denominator
+            }
+        };
+        (f, x)
     }
 }
 
@@ -583,6 +733,59 @@ mod tests {
         // The Laplacian's -1 at (0, 1) and (1, 0) cancelled to round-off.
         assert!(with(1.0 + 3.818e-15 * scale, 1.0 + 4.866e-15 * scale));
         assert!(!with(1.0, 1.0 + 1e-9 * scale));
+    }
+
+    /// `a`'s entries on the pattern `s` (one structure: the solver keeps its
+    /// analysis and guesses the last backend).
+    fn on(s: &Arc<Structure>, a: &SparseMatrix) -> SparseMatrix {
+        let mut m = SparseMatrix::with_structure(Arc::clone(s));
+        for (r, c, v) in a.entries() {
+            m.add(r, c, v);
+        }
+        m
+    }
+
+    /// The backend factorized beside the checks is the last one; when the
+    /// checks choose another (the values stopped being symmetric), the
+    /// choice is made again and the answer is that backend's.
+    #[test]
+    fn the_guessed_backend_gives_way_when_the_symmetry_changes() {
+        let (s, _) = grid(12, 0.0, 0.0).compressed(None).unwrap();
+        let spd = on(&s, &grid(12, 0.0, 0.0));
+        let general = on(&s, &grid(12, 0.5, 0.3));
+        let mut solver = LinearSolver::default();
+        for (a, backend) in [
+            (&spd, Backend::Ldlt),
+            (&general, Backend::Lu),
+            (&general, Backend::Lu),
+            (&spd, Backend::Ldlt),
+        ] {
+            let f = solver.factorize(a).unwrap();
+            assert_eq!(f.backend(), backend);
+            assert!(residual(a, &f) <= 1e-14);
+        }
+        assert_eq!(solver.stats().analyses, 2, "one analysis per backend");
+    }
+
+    /// factorize_solve's x is its factor's solve, bit for bit, and the
+    /// backward error is that solve's; a zero right-hand side falls back to
+    /// the fixed vector's test.
+    #[test]
+    fn the_first_solve_tests_the_factorization() {
+        for a in [grid(15, 0.0, 0.0), grid(15, 0.5, 0.3)] {
+            let n = a.n;
+            let b: Vec<f64> = (0..n).map(|i| (i as f64 * 0.37).cos()).collect();
+            let (f, x) = LinearSolver::default().factorize_solve(&a, &b).unwrap();
+            assert_eq!(x, f.solve(&b));
+            let ax = a.mul_vec(&x);
+            let r = max_abs(&b.iter().zip(&ax).map(|(b, a)| b - a).collect::<Vec<_>>());
+            assert!(f.backward_error() > 0.0 && f.backward_error() <= 1e-14);
+            assert!(r / max_abs(&b) <= 1e-12);
+            let zero = vec![0.0; n];
+            let (f, x) = LinearSolver::default().factorize_solve(&a, &zero).unwrap();
+            assert!(x.iter().all(|&v| v == 0.0));
+            assert!(f.backward_error() > 0.0 && f.backward_error() <= 1e-14);
+        }
     }
 
     #[test]

@@ -16,7 +16,7 @@
 use super::geometric::GeometricSeries;
 use super::pade;
 use super::path::Path;
-use super::stats::{Stats, charge};
+use super::stats::Stats;
 use super::stop::Stop;
 use crate::error::{Error, Result};
 use crate::linalg::{Choice, Factorization, LinearSolver, SparseMatrix};
@@ -421,20 +421,57 @@ pub(crate) fn factorize(
     step: usize,
     lambda: f64,
 ) -> Result<Factorization> {
+    factorize_with(lu, k, None, stats, step, lambda).map(|(f, _)| f)
+}
+
+/// [`factorize`] and the solve of K x = b, which tests the factorization
+/// ([`LinearSolver::factorize_solve`]); the solve is counted and timed as a
+/// solve.
+pub(crate) fn factorize_solve(
+    lu: &mut LinearSolver,
+    k: &SparseMatrix,
+    b: &[f64],
+    stats: &mut Stats,
+    step: usize,
+    lambda: f64,
+) -> Result<(Factorization, Vec<f64>)> {
+    let (f, x) = factorize_with(lu, k, Some(b), stats, step, lambda)?;
+    Ok((f, x.expect("solved with b")))
+}
+
+fn factorize_with(
+    lu: &mut LinearSolver,
+    k: &SparseMatrix,
+    b: Option<&[f64]>,
+    stats: &mut Stats,
+    step: usize,
+    lambda: f64,
+) -> Result<(Factorization, Option<Vec<f64>>)> {
     let t = Instant::now();
     let before = lu.stats().fallbacks;
-    let f = lu.factorize(k).map_err(|detail| Error::SingularMatrix {
+    let singular = |detail| Error::SingularMatrix {
         step,
         param: "lambda",
         at: lambda,
         detail,
-    })?;
+    };
+    let (f, x) = match b {
+        Some(b) => lu.factorize_solve(k, b).map(|(f, x)| (f, Some(x))),
+        None => lu.factorize(k).map(|f| (f, None)),
+    }
+    .map_err(singular)?;
     stats
         .linear
         .record(&f, lu.stats().fallbacks - before, lu.stats());
     stats.factorizations += 1;
-    charge(&mut stats.factorization_s, t);
-    Ok(f)
+    let mut total = t.elapsed().as_secs_f64();
+    if x.is_some() {
+        stats.solves += 1;
+        stats.solve_s += f.test_solve_seconds();
+        total -= f.test_solve_seconds();
+    }
+    stats.factorization_s += total;
+    Ok((f, x))
 }
 
 #[cfg(test)]

@@ -47,7 +47,7 @@
 //! <y − y0, y_1>; the step-end correction keeps its constraint in U and
 //! lambda (any plane transverse to the path serves).
 
-use super::continuation::{ContinuationConfig, ContinuationProblem, PathStep, factorize};
+use super::continuation::{ContinuationConfig, ContinuationProblem, PathStep, factorize_solve};
 use super::correct::{self, Constraint, Jacobian, Metric, Settings};
 use super::events;
 use super::geometric;
@@ -354,13 +354,12 @@ pub(crate) fn series_step<P: ContinuationProblem + ?Sized>(
     let t = Instant::now();
     let (kt, r_lambda) = problem.tangent(u0, lambda0)?;
     charge(&mut stats.assembly_s, t);
-    let fact = factorize(lu, &kt, stats, index, lambda0)?;
-    let solve = |b: &[f64], stats: &mut Stats, what: &str| -> Result<Vec<f64>> {
-        let t = Instant::now();
-        let neg: Vec<f64> = b.iter().map(|x| -x).collect();
-        let x = Factorization::solve(&fact, &neg);
-        stats.solves += 1;
-        charge(&mut stats.solve_s, t);
+    // Order 1 (eq. O1): λ̃_1 = ±1/sqrt(1 + Lambda^2 |U_t|~^2); U_1 = lambda_1 U_t.
+    // U_t = −Kt⁻¹ R_lambda is the solve that tests the factorization.
+    let neg: Vec<f64> = r_lambda.iter().map(|x| -x).collect();
+    let (fact, ut) = factorize_solve(lu, &kt, &neg, stats, index, lambda0)?;
+    drop(neg);
+    let finite = |x: Vec<f64>, what: &str| -> Result<Vec<f64>> {
         if x.iter().all(|v| v.is_finite()) {
             Ok(x)
         } else {
@@ -372,8 +371,15 @@ pub(crate) fn series_step<P: ContinuationProblem + ?Sized>(
             })
         }
     };
-    // Order 1 (eq. O1): λ̃_1 = ±1/sqrt(1 + Lambda^2 |U_t|~^2); U_1 = lambda_1 U_t.
-    let ut = solve(&r_lambda, stats, "order-1")?;
+    let solve = |b: &[f64], stats: &mut Stats, what: &str| -> Result<Vec<f64>> {
+        let t = Instant::now();
+        let neg: Vec<f64> = b.iter().map(|x| -x).collect();
+        let x = Factorization::solve(&fact, &neg);
+        stats.solves += 1;
+        charge(&mut stats.solve_s, t);
+        finite(x, what)
+    };
+    let ut = finite(ut, "order-1")?;
     // The problem's arc coordinates (none by default): y_t = dy/dlambda
     // along U_t; they join |Ũ_t|^2 in the normalization and every inner
     // product below.
