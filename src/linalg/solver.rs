@@ -12,11 +12,10 @@
 //! Numerical Algorithms*, 2002, eq. 7.23), and a backend whose η exceeds
 //! [`BACKWARD_ERROR_LIMIT`] (LDLᵀ without pivoting meeting a tiny pivot on an
 //! indefinite tangent) hands over to the next: LDLᵀ → LBLᵀ (Bunch–Kaufman
-//! inside supernodes) → LU. The check costs one solve (the caller's own
-//! first solve where it hands its right-hand side to
-//! [`LinearSolver::factorize_solve`]) and one product with A; the checks on
-//! the values (finite, symmetric, the row sums of |A|) run on another thread
-//! beside the sequential factorization.
+//! inside supernodes) → LU. The check costs one solve and two products with
+//! A; the checks on the values (finite, symmetric) and one product run on
+//! another thread beside the sequential factorization, and the solve beside
+//! the caller's first solve ([`LinearSolver::factorize_solve`]).
 
 use std::sync::{Arc, Mutex, Weak};
 use std::time::Instant;
@@ -197,7 +196,8 @@ pub struct Factorization {
     inertia: Option<(usize, usize, usize)>,
     /// Seconds of the numeric factorization alone (no analysis, no check).
     numeric_s: f64,
-    /// Seconds of the solve that tested it.
+    /// Seconds of the caller's solve beside its test
+    /// ([`LinearSolver::factorize_solve`]).
     test_solve_s: f64,
     mumps_memory_mb: Option<(f64, f64, f64)>,
 }
@@ -247,28 +247,24 @@ impl LinearSolver {
         self.factorize_checked(a, None).map(|(f, _)| f)
     }
 
-    /// [`LinearSolver::factorize`] and the solve of A x = b, which is the
-    /// backward-error test of the factorization (in place of the fixed
-    /// vector's solve: one solve less). A zero or non-finite b is no test;
-    /// the fixed vector is then solved too.
+    /// [`LinearSolver::factorize`] and the solve of A x = b, on another
+    /// thread beside the solve of the backward-error test (the two read the
+    /// same factor; sequential, they cost two solves).
     pub fn factorize_solve(
         &mut self,
         a: &SparseMatrix,
         b: &[f64],
     ) -> Result<(Factorization, Vec<f64>), String> {
         let (f, x) = self.factorize_checked(a, Some(b))?;
-        let x = x.unwrap_or_else(|| f.solve(b));
-        Ok((f, x))
+        Ok((f, x.expect("solved with b")))
     }
 
-    /// The factorization, and the solution of its test when `b` was the
-    /// test.
+    /// The factorization, and with `b` the solve of A x = b.
     fn factorize_checked(
         &mut self,
         a: &SparseMatrix,
         b: Option<&[f64]>,
     ) -> Result<(Factorization, Option<Vec<f64>>), String> {
-        let b = b.filter(|b| b.iter().all(|v| v.is_finite()) && max_abs(b) > 0.0);
         let (s, values) = a.compressed(self.structure.as_ref())?;
         if self.structure.as_ref().map(|k| k.id()) != Some(s.id()) {
             self.structure = Some(Arc::clone(&s));
@@ -284,11 +280,11 @@ impl LinearSolver {
             Some(backend) => {
                 let (f, checks) = rayon::join(
                     || self.numeric(backend, &s, &values, backend.symmetric()),
-                    || Checks::of(&s, &values, b),
+                    || Checks::of(&s, &values),
                 );
                 (Some((backend, f)), checks)
             }
-            None => (None, Checks::of(&s, &values, b)),
+            None => (None, Checks::of(&s, &values)),
         };
         if let Some(k) = checks.non_finite {
             let (r, c) = position(&s, k);
@@ -315,7 +311,24 @@ impl LinearSolver {
                 Some((_, f)) => f,
                 None => self.numeric(backend, &s, &values, symmetric),
             };
-            match factored.map(|f| checks.checked(f, &s, &values)) {
+            // The caller's solve beside the test's (two solves of one
+            // factor, independent): kept if the test passes.
+            let tested = factored.map(|mut f| {
+                let (eta, x) = match b {
+                    Some(b) => rayon::join(
+                        || checks.backward_error(&f, &s, &values),
+                        || {
+                            let t = Instant::now();
+                            (f.solve(b), t.elapsed().as_secs_f64())
+                        },
+                    ),
+                    None => (checks.backward_error(&f, &s, &values), (vec![], 0.0)),
+                };
+                f.backward_error = eta;
+                f.test_solve_s = x.1;
+                (f, x.0)
+            });
+            match tested {
                 Ok((f, x)) if f.backward_error <= BACKWARD_ERROR_LIMIT => {
                     self.stats.count(&f, reasons.len());
                     self.last = Some(backend);
@@ -462,7 +475,8 @@ impl Factorization {
         self.numeric_s
     }
 
-    /// Seconds of the solve that tested the factorization.
+    /// Seconds of the caller's solve of [`LinearSolver::factorize_solve`],
+    /// beside the solve that tested the factorization.
     pub fn test_solve_seconds(&self) -> f64 {
         self.test_solve_s
     }
@@ -598,15 +612,17 @@ struct Checks {
     non_finite: Option<usize>,
     /// [`is_symmetric`].
     symmetric: bool,
-    /// The right-hand side of the backward-error test: the caller's, or
-    /// A x_ref, x_ref a fixed vector with entries in [1, 2).
+    /// The right-hand side of the backward-error test, A x_ref, x_ref a
+    /// fixed vector with entries in [1, 2): not the caller's, which may
+    /// hide an unstable factor (a right-hand side that does not excite its
+    /// lost digits; unit test `a_tiny_pivot_hands_over_to_bunch_kaufman`).
     b: Vec<f64>,
     /// max_i Σ_j |a_ij|.
     norm_inf: f64,
 }
 
 impl Checks {
-    fn of(s: &Structure, values: &[f64], b: Option<&[f64]>) -> Self {
+    fn of(s: &Structure, values: &[f64]) -> Self {
         let non_finite = values.iter().position(|v| !v.is_finite());
         if non_finite.is_some() {
             return Self {
@@ -618,26 +634,15 @@ impl Checks {
         }
         let n = s.n();
         let mut row_sums = vec![0.0; n];
-        let b = match b {
-            Some(b) => {
-                for (&r, v) in s.row_idx().iter().zip(values) {
-                    row_sums[r] += v.abs();
-                }
-                b.to_vec()
+        let mut b = vec![0.0; n];
+        for c in 0..n {
+            let xc = 1.0 + ((c * 7919) % 113) as f64 / 113.0;
+            let col = s.col_ptr()[c]..s.col_ptr()[c + 1];
+            for (&r, v) in s.row_idx()[col.clone()].iter().zip(&values[col]) {
+                b[r] += v * xc;
+                row_sums[r] += v.abs();
             }
-            None => {
-                let mut b = vec![0.0; n];
-                for c in 0..n {
-                    let xc = 1.0 + ((c * 7919) % 113) as f64 / 113.0;
-                    let col = s.col_ptr()[c]..s.col_ptr()[c + 1];
-                    for (&r, v) in s.row_idx()[col.clone()].iter().zip(&values[col]) {
-                        b[r] += v * xc;
-                        row_sums[r] += v.abs();
-                    }
-                }
-                b
-            }
-        };
+        }
         Self {
             non_finite,
             symmetric: is_symmetric(s, values),
@@ -646,18 +651,11 @@ impl Checks {
         }
     }
 
-    /// `f` with the normwise backward error of its solve of A x = b (NaN
-    /// when the solve is not finite), and x.
-    fn checked(
-        &self,
-        mut f: Factorization,
-        s: &Structure,
-        values: &[f64],
-    ) -> (Factorization, Vec<f64>) {
-        let t = Instant::now();
+    /// The normwise backward error of f's solve of A x = b (NaN when the
+    /// solve is not finite).
+    fn backward_error(&self, f: &Factorization, s: &Structure, values: &[f64]) -> f64 {
         let x = f.solve(&self.b);
-        f.test_solve_s = t.elapsed().as_secs_f64();
-        f.backward_error = if !x.iter().all(|v| v.is_finite()) {
+        if !x.iter().all(|v| v.is_finite()) {
             f64::NAN
         } else {
             let ax = mul(s, values, &x);
@@ -672,8 +670,7 @@ impl Checks {
             } else {
                 r / denominator
             }
-        };
-        (f, x)
+        }
     }
 }
 
@@ -768,24 +765,46 @@ mod tests {
     }
 
     /// factorize_solve's x is its factor's solve, bit for bit, and the
-    /// backward error is that solve's; a zero right-hand side falls back to
-    /// the fixed vector's test.
+    /// factorization is tested as by factorize.
     #[test]
-    fn the_first_solve_tests_the_factorization() {
+    fn the_first_solve_is_the_factors_solve() {
         for a in [grid(15, 0.0, 0.0), grid(15, 0.5, 0.3)] {
             let n = a.n;
             let b: Vec<f64> = (0..n).map(|i| (i as f64 * 0.37).cos()).collect();
             let (f, x) = LinearSolver::default().factorize_solve(&a, &b).unwrap();
             assert_eq!(x, f.solve(&b));
-            let ax = a.mul_vec(&x);
-            let r = max_abs(&b.iter().zip(&ax).map(|(b, a)| b - a).collect::<Vec<_>>());
-            assert!(f.backward_error() > 0.0 && f.backward_error() <= 1e-14);
-            assert!(r / max_abs(&b) <= 1e-12);
-            let zero = vec![0.0; n];
-            let (f, x) = LinearSolver::default().factorize_solve(&a, &zero).unwrap();
-            assert!(x.iter().all(|&v| v == 0.0));
+            let alone = LinearSolver::default().factorize(&a).unwrap();
+            assert_eq!(f.backward_error(), alone.backward_error());
             assert!(f.backward_error() > 0.0 && f.backward_error() <= 1e-14);
         }
+    }
+
+    /// Blocks [[1e-20, 1], [1, 1]]: LDLᵀ without pivoting takes the tiny
+    /// pivot and loses the 1 of the second (backward error ~0.5): the test
+    /// catches it and LBLᵀ takes over, also where the caller's right-hand
+    /// side (here zero on the tiny pivots) would not have shown it.
+    #[test]
+    fn a_tiny_pivot_hands_over_to_bunch_kaufman() {
+        let m = 50;
+        let mut a = SparseMatrix::new(2 * m);
+        for k in 0..m {
+            a.add(2 * k, 2 * k, 1e-20);
+            a.add(2 * k, 2 * k + 1, 1.0);
+            a.add(2 * k + 1, 2 * k, 1.0);
+            a.add(2 * k + 1, 2 * k + 1, 1.0);
+        }
+        let only_ldlt = LinearSolver::new(Choice::Only(Backend::Ldlt)).factorize(&a);
+        assert!(only_ldlt.is_err(), "LDLᵀ passed the test");
+        let b: Vec<f64> = (0..2 * m).map(|i| (i % 2) as f64).collect();
+        let mut auto = LinearSolver::default();
+        let f = auto.factorize(&a).unwrap();
+        let (g, x) = auto.factorize_solve(&a, &b).unwrap();
+        for f in [&f, &g] {
+            assert_eq!(f.backend(), Backend::Lblt);
+            assert!(residual(&a, f) <= 1e-14);
+        }
+        assert_eq!(auto.stats().fallbacks, 2);
+        assert_eq!(x, g.solve(&b));
     }
 
     #[test]
