@@ -198,7 +198,7 @@ pub struct Factorization {
     numeric_s: f64,
     /// Seconds of the caller's solve beside its test
     /// ([`LinearSolver::factorize_solve`]).
-    test_solve_s: f64,
+    caller_solve_s: f64,
     mumps_memory_mb: Option<(f64, f64, f64)>,
 }
 
@@ -314,7 +314,7 @@ impl LinearSolver {
             // The caller's solve beside the test's (two solves of one
             // factor, independent): kept if the test passes.
             let tested = factored.map(|mut f| {
-                let (eta, x) = match b {
+                let (eta, (x, seconds)) = match b {
                     Some(b) => rayon::join(
                         || checks.backward_error(&f, &s, &values),
                         || {
@@ -325,8 +325,8 @@ impl LinearSolver {
                     None => (checks.backward_error(&f, &s, &values), (vec![], 0.0)),
                 };
                 f.backward_error = eta;
-                f.test_solve_s = x.1;
-                (f, x.0)
+                f.caller_solve_s = seconds;
+                (f, x)
             });
             match tested {
                 Ok((f, x)) if f.backward_error <= BACKWARD_ERROR_LIMIT => {
@@ -383,7 +383,7 @@ impl LinearSolver {
             self.stats.factor_entries = entries;
             let f = Factorization {
                 numeric_s: t.elapsed().as_secs_f64(),
-                test_solve_s: 0.0,
+                caller_solve_s: 0.0,
                 factor: Factor::Mumps(shared, generation),
                 par: self.par,
                 n: s.n(),
@@ -430,7 +430,7 @@ impl LinearSolver {
         analysis = self.stats.analysis_s - analysis;
         let mut f = Factorization {
             numeric_s: start.elapsed().as_secs_f64() - analysis,
-            test_solve_s: 0.0,
+            caller_solve_s: 0.0,
             factor,
             par: self.par,
             n: s.n(),
@@ -477,8 +477,8 @@ impl Factorization {
 
     /// Seconds of the caller's solve of [`LinearSolver::factorize_solve`],
     /// beside the solve that tested the factorization.
-    pub fn test_solve_seconds(&self) -> f64 {
-        self.test_solve_s
+    pub fn caller_solve_seconds(&self) -> f64 {
+        self.caller_solve_s
     }
 
     /// The backward error of the check solve.

@@ -247,20 +247,7 @@ impl SymmetricFactor {
             perm_inv,
         })
     }
-}
 
-impl Drop for SymmetricFactor {
-    /// The factor's buffer becomes the spare (the larger one is kept).
-    fn drop(&mut self) {
-        if let Ok(mut spare) = SPARE_FACTOR.lock()
-            && spare.capacity() < self.values.capacity()
-        {
-            *spare = std::mem::take(&mut self.values);
-        }
-    }
-}
-
-impl SymmetricFactor {
     /// Solves A x = b in place: P A Pᵀ (P x) = P b.
     pub fn solve_in_place(&self, sym: &SymmetricSymbolic, x: &mut [f64], par: Par) {
         let n = x.len();
@@ -347,5 +334,16 @@ impl SymmetricFactor {
             }
         }
         counts
+    }
+}
+
+impl Drop for SymmetricFactor {
+    /// The factor's buffer becomes the spare (the larger one is kept).
+    fn drop(&mut self) {
+        if let Ok(mut spare) = SPARE_FACTOR.lock()
+            && spare.capacity() < self.values.capacity()
+        {
+            *spare = std::mem::take(&mut self.values);
+        }
     }
 }
