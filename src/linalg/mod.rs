@@ -18,6 +18,7 @@ pub mod mpi;
 pub mod mumps;
 mod solver;
 mod sparse_matrix;
+mod split;
 mod symmetric;
 
 pub use dense_lu::DenseLu;

@@ -24,7 +24,8 @@ use faer::Par;
 
 use super::lu::{LuFactor, LuSymbolic};
 use super::sparse_matrix::{SparseMatrix, Structure};
-use super::symmetric::{Pivoting, SymmetricFactor, SymmetricSymbolic};
+use super::split::{SplitFactor, SplitSymbolic};
+use super::symmetric::{Pivoting, SymmetricFactor, SymmetricSymbolic, set_spare_budget};
 
 /// Relative tolerance of the symmetry test, entry by entry:
 /// |a_ij − a_ji| ≤ tol · max(|a_ij|, |a_ji|, 1e-3 max|A|). The floor
@@ -42,6 +43,18 @@ pub const SYMMETRY_TOLERANCE: f64 = 1e-10;
 /// factorization gives about n^(1/2) u ≈ 1e-13 at a million unknowns; growth
 /// in an unpivoted LDLᵀ on an indefinite matrix shows as 1e-8 and worse.
 pub const BACKWARD_ERROR_LIMIT: f64 = 1e-10;
+
+/// Fewest unknowns for which LDLᵀ is split over two threads (`split.rs`):
+/// below it the split's set-up (two analyses, the separator's dense
+/// Schur complement) outweighs the second core. Measured with `anm factor`
+/// on the plate-cylinder strips (README "Linear algebra").
+pub const SPLIT_MIN_UNKNOWNS: usize = 50_000;
+
+/// Largest ratio of a split's factor entries to the whole factor's: the
+/// halves are ordered with the separator last, which can add fill (measured
+/// +4% on the 400×40 strip, +25% on the crowned-roll strip at a million
+/// unknowns, where the split factorization took 8.8 s against 6.9 s).
+pub const SPLIT_MAX_FILL: f64 = 1.1;
 
 /// A factorization method.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -126,6 +139,8 @@ pub struct SolverStats {
     pub negative_pivots: Option<usize>,
     /// Seconds in symbolic analyses (ordering, supernodes).
     pub analysis_s: f64,
+    /// Unknowns of the separator where LDLᵀ is split over two threads.
+    pub split_separator: Option<usize>,
 }
 
 impl SolverStats {
@@ -137,6 +152,7 @@ impl SolverStats {
         self.matrix_entries = solver.matrix_entries;
         self.analyses = self.analyses.max(solver.analyses);
         self.analysis_s = self.analysis_s.max(solver.analysis_s);
+        self.split_separator = solver.split_separator.or(self.split_separator);
     }
 
     /// Counts an accepted factorization that handed over `fallbacks` times.
@@ -163,6 +179,11 @@ pub struct LinearSolver {
     par: Par,
     structure: Option<Arc<Structure>>,
     symmetric: Option<Arc<SymmetricSymbolic>>,
+    /// LDLᵀ's split over two threads: not looked for yet (`None`), or
+    /// found (`Some(Some)`), or not possible on this pattern.
+    split: Option<Option<Arc<SplitSymbolic>>>,
+    /// Threads for LDLᵀ (2 or more: split when the pattern allows).
+    threads: usize,
     lu: Option<Arc<LuSymbolic>>,
     #[cfg(feature = "mumps")]
     mumps: Option<Arc<std::sync::Mutex<mumps_backend::Instance>>>,
@@ -179,6 +200,7 @@ impl Default for LinearSolver {
 
 enum Factor {
     Symmetric(Arc<SymmetricSymbolic>, SymmetricFactor),
+    Split(Arc<SplitSymbolic>, SplitFactor),
     Lu(Arc<LuSymbolic>, Box<LuFactor>),
     /// MUMPS keeps the factors inside its instance: a factorization is valid
     /// until the solver's next one (checked by the generation number).
@@ -203,14 +225,17 @@ pub struct Factorization {
 }
 
 impl LinearSolver {
-    /// Sequential factorizations: measured on the 98,400-unknown strip,
-    /// faer's supernodal LDLᵀ on 2 threads was slower than on 1 (README).
+    /// faer's factorizations sequential (measured on the 98,400-unknown
+    /// strip, its supernodal LDLᵀ on 2 threads was slower than on 1); LDLᵀ
+    /// split over two threads where rayon's pool has them (README).
     pub fn new(choice: Choice) -> Self {
         Self {
             choice,
             par: Par::Seq,
             structure: None,
             symmetric: None,
+            split: None,
+            threads: rayon::current_num_threads(),
             lu: None,
             #[cfg(feature = "mumps")]
             mumps: None,
@@ -219,8 +244,10 @@ impl LinearSolver {
         }
     }
 
-    /// Factorizations on `threads` threads (1: sequential).
+    /// Factorizations on `threads` threads (1: sequential): LDLᵀ split in
+    /// two, LBLᵀ and LU by faer's own parallel codes.
     pub fn with_threads(mut self, threads: usize) -> Self {
+        self.threads = threads;
         self.par = if threads <= 1 {
             Par::Seq
         } else {
@@ -269,6 +296,7 @@ impl LinearSolver {
         if self.structure.as_ref().map(|k| k.id()) != Some(s.id()) {
             self.structure = Some(Arc::clone(&s));
             self.symmetric = None;
+            self.split = None;
             self.lu = None;
             self.last = None;
             #[cfg(feature = "mumps")]
@@ -278,10 +306,8 @@ impl LinearSolver {
         }
         let (guess, checks) = match self.last {
             Some(backend) => {
-                let (f, checks) = rayon::join(
-                    || self.numeric(backend, &s, &values, backend.symmetric()),
-                    || Checks::of(&s, &values),
-                );
+                let (f, checks) =
+                    self.numeric_beside(backend, &s, &values, || Checks::of(&s, &values));
                 (Some((backend, f)), checks)
             }
             None => (None, Checks::of(&s, &values)),
@@ -347,6 +373,40 @@ impl LinearSolver {
         Err(format!("no factorization passed: {}", reasons.join("; ")))
     }
 
+    /// [`LinearSolver::numeric`] with `beside` on another thread: beside
+    /// the whole factorization, or with the smaller half of a split one.
+    fn numeric_beside<R: Send>(
+        &mut self,
+        backend: Backend,
+        s: &Arc<Structure>,
+        values: &[f64],
+        beside: impl FnOnce() -> R + Send,
+    ) -> (Result<Factorization, String>, R) {
+        let split = match backend {
+            Backend::Ldlt => self.split(s),
+            _ => Ok(None),
+        };
+        match split {
+            Ok(Some(split)) => {
+                set_spare_budget(split.stored_values());
+                let start = Instant::now();
+                let (f, side) = SplitFactor::new(&split, values, beside);
+                let f = f.map(|f| {
+                    self.stats.factor_entries = split.factor_entries();
+                    let mut f = self.factorization(Factor::Split(split, f), s, backend);
+                    f.numeric_s = start.elapsed().as_secs_f64();
+                    f
+                });
+                (f, side)
+            }
+            Ok(None) => rayon::join(
+                || self.numeric(backend, s, values, backend.symmetric()),
+                beside,
+            ),
+            Err(e) => (Err(e), beside()),
+        }
+    }
+
     /// The numeric factorization by `backend` (and the pattern's analysis
     /// the first time), not yet checked. `symmetric` chooses the MUMPS
     /// analysis; the faer backends know theirs.
@@ -394,19 +454,19 @@ impl LinearSolver {
             };
             return Ok(f);
         }
-        let factor = if backend.symmetric() {
-            if self.symmetric.is_none() {
-                self.symmetric = shared_analysis(s);
-            }
-            if self.symmetric.is_none() {
-                let t = Instant::now();
-                let sym = Arc::new(SymmetricSymbolic::new(s)?);
-                share_analysis(s, &sym);
-                self.symmetric = Some(sym);
-                self.stats.analysis_s += t.elapsed().as_secs_f64();
-                self.stats.analyses += 1;
-            }
-            let sym = Arc::clone(self.symmetric.as_ref().expect("set above"));
+        let split = if backend == Backend::Ldlt {
+            self.split(s)?
+        } else {
+            None
+        };
+        let factor = if let Some(split) = split {
+            set_spare_budget(split.stored_values());
+            self.stats.factor_entries = split.factor_entries();
+            let f = SplitFactor::new(&split, values, || ()).0?;
+            Factor::Split(split, f)
+        } else if backend.symmetric() {
+            let sym = self.whole(s)?;
+            set_spare_budget(sym.factor_entries());
             self.stats.factor_entries = sym.factor_entries();
             let pivoting = if backend == Backend::Ldlt {
                 Pivoting::None
@@ -428,21 +488,86 @@ impl LinearSolver {
             Factor::Lu(sym, Box::new(f))
         };
         analysis = self.stats.analysis_s - analysis;
-        let mut f = Factorization {
-            numeric_s: start.elapsed().as_secs_f64() - analysis,
+        let mut f = self.factorization(factor, s, backend);
+        f.numeric_s = start.elapsed().as_secs_f64() - analysis;
+        Ok(f)
+    }
+
+    /// A faer factor as a [`Factorization`] (with its inertia), unchecked.
+    fn factorization(&self, factor: Factor, s: &Structure, backend: Backend) -> Factorization {
+        let inertia = match &factor {
+            Factor::Symmetric(sym, sf) => Some(sf.inertia(sym)),
+            Factor::Split(sym, sf) => Some(sf.inertia(sym)),
+            _ => None,
+        };
+        Factorization {
+            numeric_s: 0.0,
             caller_solve_s: 0.0,
             factor,
             par: self.par,
             n: s.n(),
             backend,
             backward_error: f64::NAN,
-            inertia: None,
+            inertia,
             mumps_memory_mb: None,
-        };
-        if let Factor::Symmetric(sym, sf) = &f.factor {
-            f.inertia = Some(sf.inertia(sym));
         }
-        Ok(f)
+    }
+
+    /// The symmetric analysis of the whole pattern (shared, or made here).
+    fn whole(&mut self, s: &Arc<Structure>) -> Result<Arc<SymmetricSymbolic>, String> {
+        if self.symmetric.is_none() {
+            self.symmetric = shared(&ANALYSES, s);
+        }
+        if self.symmetric.is_none() {
+            let t = Instant::now();
+            let sym = Arc::new(SymmetricSymbolic::new(s)?);
+            share(&ANALYSES, s, &sym);
+            self.symmetric = Some(sym);
+            self.stats.analysis_s += t.elapsed().as_secs_f64();
+            self.stats.analyses += 1;
+        }
+        Ok(Arc::clone(self.symmetric.as_ref().expect("set above")))
+    }
+
+    /// The split of LDLᵀ over two threads for this pattern, where it has
+    /// them and the pattern is large enough, splits, and its halves hold at
+    /// most [`SPLIT_MAX_FILL`] times the whole factor's entries (analysed
+    /// once per pattern and process).
+    fn split(&mut self, s: &Arc<Structure>) -> Result<Option<Arc<SplitSymbolic>>, String> {
+        if self.threads < 2 || s.n() < SPLIT_MIN_UNKNOWNS {
+            return Ok(None);
+        }
+        if self.split.is_none() {
+            self.split = shared(&SPLITS, s).map(Some);
+        }
+        if self.split.is_none() && REFUSED.lock().is_ok_and(|r| r.contains(&s.id())) {
+            self.split = Some(None);
+        }
+        if self.split.is_none() {
+            let whole = self.whole(s)?.factor_entries();
+            let t = Instant::now();
+            let found = SplitSymbolic::new(s)?
+                .filter(|f| f.factor_entries() as f64 <= SPLIT_MAX_FILL * whole as f64)
+                .map(Arc::new);
+            match &found {
+                Some(split) => {
+                    share(&SPLITS, s, split);
+                    // Rebuilt if LBLᵀ takes over (0.3 GB at a million unknowns).
+                    self.symmetric = None;
+                }
+                None => {
+                    if let Ok(mut refused) = REFUSED.lock() {
+                        refused.push(s.id());
+                    }
+                }
+            }
+            self.split = Some(found);
+            self.stats.analysis_s += t.elapsed().as_secs_f64();
+            self.stats.analyses += 1;
+        }
+        let split = self.split.clone().flatten();
+        self.stats.split_separator = split.as_ref().map(|f| f.separator());
+        Ok(split)
     }
 }
 
@@ -453,6 +578,7 @@ impl Factorization {
         debug_assert_eq!(x.len(), self.n);
         match &self.factor {
             Factor::Symmetric(sym, f) => f.solve_in_place(sym, &mut x, self.par),
+            Factor::Split(sym, f) => f.solve_in_place(sym, &mut x),
             Factor::Lu(sym, f) => f.solve_in_place(sym, &mut x, self.par),
             #[cfg(feature = "mumps")]
             Factor::Mumps(inst, generation) => {
@@ -555,20 +681,28 @@ mod mumps_backend {
 /// one run (the path's, its grid points', its events') factorize the same
 /// pattern, and one analysis serves them all (at a million unknowns it
 /// takes seconds and holds the permuted pattern, ~0.3 GB).
-static ANALYSES: Mutex<Vec<(u64, Weak<SymmetricSymbolic>)>> = Mutex::new(Vec::new());
+static ANALYSES: Analyses<SymmetricSymbolic> = Mutex::new(Vec::new());
 
-fn shared_analysis(s: &Structure) -> Option<Arc<SymmetricSymbolic>> {
-    let analyses = ANALYSES.lock().ok()?;
+/// The same for the split analyses.
+static SPLITS: Analyses<SplitSymbolic> = Mutex::new(Vec::new());
+
+/// The patterns whose split was refused (no separator, or too much fill).
+static REFUSED: Mutex<Vec<u64>> = Mutex::new(Vec::new());
+
+type Analyses<T> = Mutex<Vec<(u64, Weak<T>)>>;
+
+fn shared<T>(list: &Analyses<T>, s: &Structure) -> Option<Arc<T>> {
+    let analyses = list.lock().ok()?;
     analyses
         .iter()
         .find(|(id, _)| *id == s.id())
         .and_then(|(_, a)| a.upgrade())
 }
 
-fn share_analysis(s: &Structure, sym: &Arc<SymmetricSymbolic>) {
-    if let Ok(mut analyses) = ANALYSES.lock() {
+fn share<T>(list: &Analyses<T>, s: &Structure, analysis: &Arc<T>) {
+    if let Ok(mut analyses) = list.lock() {
         analyses.retain(|(_, a)| a.strong_count() > 0);
-        analyses.push((s.id(), Arc::downgrade(sym)));
+        analyses.push((s.id(), Arc::downgrade(analysis)));
     }
 }
 
@@ -783,6 +917,41 @@ mod tests {
     /// pivot and loses the 1 of the second (backward error ~0.5): the test
     /// catches it and LBLᵀ takes over, also where the caller's right-hand
     /// side (here zero on the tiny pivots) would not have shown it.
+    /// On two threads a large LDLᵀ is split in two halves and a separator
+    /// (split.rs): its inertia is that of the whole factorization (definite
+    /// and indefinite), and on a well-conditioned matrix (eigenvalues in
+    /// [1, 9]) its backward error is round-off and its solution equals the
+    /// whole one to round-off.
+    #[test]
+    fn ldlt_split_over_two_threads_solves_as_the_whole() {
+        for shift in [1.0, -0.5] {
+            let a = grid(224, shift, 0.0);
+            assert!(a.n >= SPLIT_MIN_UNKNOWNS);
+            let b: Vec<f64> = (0..a.n).map(|i| ((i * 13) % 7) as f64 - 3.0).collect();
+            let mut whole = LinearSolver::new(Choice::Only(Backend::Ldlt)).with_threads(1);
+            let mut split = LinearSolver::new(Choice::Only(Backend::Ldlt)).with_threads(2);
+            let (fw, fs) = (whole.factorize(&a).unwrap(), split.factorize(&a).unwrap());
+            assert!(whole.stats().split_separator.is_none());
+            let ns = split.stats().split_separator.expect("split");
+            assert!(ns > 0 && 8 * ns <= a.n, "separator {ns}");
+            assert_eq!(fs.inertia(), fw.inertia());
+            if shift > 0.0 {
+                assert!(fs.backward_error() <= 1e-15, "{:e}", fs.backward_error());
+                let (xw, xs) = (fw.solve(&b), fs.solve(&b));
+                let diff = xw
+                    .iter()
+                    .zip(&xs)
+                    .fold(0.0f64, |m, (p, q)| m.max((p - q).abs()));
+                assert!(diff <= 1e-14 * max_abs(&xw), "{diff:e}");
+            } else {
+                // Unpivoted on an indefinite matrix: 2.9e-12 whole, 2.1e-13
+                // split (measured).
+                assert!(fs.backward_error() <= BACKWARD_ERROR_LIMIT);
+                assert!(fw.inertia().unwrap().0 > 0, "indefinite");
+            }
+        }
+    }
+
     #[test]
     fn a_tiny_pivot_hands_over_to_bunch_kaufman() {
         let m = 50;

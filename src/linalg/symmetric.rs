@@ -21,6 +21,7 @@ use faer::sparse::linalg::{SupernodalThreshold, amd};
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat, SymbolicSparseColMatRef};
 use faer::{Conj, MatMut, Par, Side};
 use std::sync::Mutex;
+use std::sync::atomic::{AtomicUsize, Ordering};
 
 use super::sparse_matrix::Structure;
 
@@ -47,62 +48,97 @@ pub struct SymmetricSymbolic {
     gather: Vec<u32>,
 }
 
-/// The values of the last symmetric factor dropped in this process, which
-/// the next factorization that fits in it reuses: a fresh factor's pages are
-/// faulted in and zeroed by the kernel before faer zeroes them (measured
-/// 7% of the factorization at 98,400 unknowns). One buffer for all
-/// solvers, so that a solver that keeps its analysis holds no factor while
-/// another factorizes (the peak of the run stays one factor).
-static SPARE_FACTOR: Mutex<Vec<f64>> = Mutex::new(Vec::new());
+/// The values of the last symmetric factors dropped in this process, which
+/// the next factorizations that fit in them reuse: a fresh factor's pages
+/// are faulted in and zeroed by the kernel before faer zeroes them (measured
+/// 7% of the factorization at 98,400 unknowns). Shared by all solvers, so
+/// that a solver that keeps its analysis holds no factor while another
+/// factorizes (the peak of the run stays one factor); two buffers, for the
+/// two halves of a split factorization (`split.rs`).
+static SPARE_FACTORS: Mutex<Vec<Vec<f64>>> = Mutex::new(Vec::new());
 
-/// A zeroed buffer of `len` values, the spare one if it is large enough.
+/// How many dropped factors are kept.
+const SPARES: usize = 2;
+
+/// A buffer of `len` values, the smallest spare that is large enough. Its
+/// values are left as they are: faer's numeric factorizations zero the
+/// factor themselves (a second memset of the whole factor otherwise).
 fn factor_buffer(len: usize) -> Vec<f64> {
-    let mut spare = SPARE_FACTOR
-        .lock()
-        .map(|mut s| std::mem::take(&mut *s))
-        .unwrap_or_default();
-    if spare.capacity() < len {
-        return vec![0.0; len];
+    let spare = SPARE_FACTORS.lock().ok().and_then(|mut spares| {
+        let best = (0..spares.len())
+            .filter(|&i| spares[i].capacity() >= len)
+            .min_by_key(|&i| spares[i].capacity())?;
+        Some(spares.swap_remove(best))
+    });
+    match spare {
+        Some(mut v) => {
+            v.truncate(len);
+            v.resize(len, 0.0);
+            v
+        }
+        None => vec![0.0; len],
     }
-    spare.clear();
-    spare.resize(len, 0.0);
-    spare
+}
+
+/// The values the spares may hold in all: about those of the last
+/// factorization (one whole factor, or the two halves of a split one), so
+/// that two whole factors are never kept.
+static SPARE_BUDGET: AtomicUsize = AtomicUsize::new(usize::MAX);
+
+/// Sets the spares' budget to the `values` of a factorization about to be
+/// made (a quarter more is allowed: a reused buffer keeps its capacity).
+pub fn set_spare_budget(values: usize) {
+    SPARE_BUDGET.store(values.saturating_add(values / 4), Ordering::Relaxed);
+}
+
+/// Keeps `values` as a spare factor: the smallest spares go while there
+/// are more than `SPARES` or they hold more than the budget.
+fn keep_spare(values: Vec<f64>) {
+    if let Ok(mut spares) = SPARE_FACTORS.lock() {
+        spares.push(values);
+        let budget = SPARE_BUDGET.load(Ordering::Relaxed);
+        while spares.len() > SPARES || spares.iter().map(|v| v.capacity()).sum::<usize>() > budget {
+            let smallest = (0..spares.len())
+                .min_by_key(|&i| spares[i].capacity())
+                .expect("not empty");
+            spares.swap_remove(smallest);
+        }
+    }
 }
 
 impl SymmetricSymbolic {
+    /// The analysis of the whole pattern, in faer's AMD ordering.
     pub fn new(s: &Structure) -> Result<Self, String> {
         let n = s.n();
         if u32::try_from(s.nnz()).is_err() || u32::try_from(n).is_err() {
             return Err(format!("{} entries: more than 32-bit slots", s.nnz()));
         }
         let a = SymbolicSparseColMatRef::new_checked(n, n, s.col_ptr(), None, s.row_idx());
+        Self::with_order(s, amd_order(a)?)
+    }
+
+    /// The analysis of the principal submatrix of A on the unknowns `fwd`,
+    /// in that order (`fwd[i]`: the unknown of A at position i).
+    pub fn with_order(s: &Structure, fwd: Vec<usize>) -> Result<Self, String> {
         let params = CholeskySymbolicParams {
             supernodal_flop_ratio_threshold: SupernodalThreshold::FORCE_SUPERNODAL,
             ..Default::default()
         };
-        // The ordering faer's symbolic Cholesky takes with AMD.
-        let mut fwd = vec![0usize; n];
-        let mut inv = vec![0usize; n];
-        let mut mem = MemBuffer::try_new(amd::order_maybe_unsorted_scratch::<usize>(n, s.nnz()))
-            .map_err(|_| "symbolic analysis: out of memory".to_string())?;
-        amd::order_maybe_unsorted(
-            &mut fwd,
-            &mut inv,
-            a,
-            params.amd_params,
-            MemStack::new(&mut mem),
-        )
-        .map_err(|e| format!("symbolic analysis: {e:?}"))?;
-        drop(mem);
+        let n = fwd.len();
+        let mut inv = vec![usize::MAX; s.n()];
+        for (i, &k) in fwd.iter().enumerate() {
+            inv[k] = i;
+        }
         // The lower entries of A at (max, min) of their permuted positions,
         // gathered by columns; the full permuted pattern for the supernodes.
         let mut lower_count = vec![0usize; n + 1];
         let mut full_count = vec![0usize; n + 1];
         let moved = |k: usize, c: usize| {
             let r = s.row_idx()[k];
-            (r >= c).then(|| (inv[r].max(inv[c]), inv[r].min(inv[c])))
+            (r >= c && inv[r] != usize::MAX && inv[c] != usize::MAX)
+                .then(|| (inv[r].max(inv[c]), inv[r].min(inv[c])))
         };
-        for c in 0..n {
+        for c in 0..s.n() {
             for k in s.col_ptr()[c]..s.col_ptr()[c + 1] {
                 if let Some((i, j)) = moved(k, c) {
                     lower_count[j + 1] += 1;
@@ -121,7 +157,7 @@ impl SymmetricSymbolic {
         // (row << 32 | slot of A): one sort key per entry, 8 bytes.
         let mut lower_rows = vec![0u64; lower_ptr[n]];
         let mut full_rows = vec![0usize; full_ptr[n]];
-        for c in 0..n {
+        for c in 0..s.n() {
             for k in s.col_ptr()[c]..s.col_ptr()[c + 1] {
                 if let Some((i, j)) = moved(k, c) {
                     lower_rows[lower_count[j]] = (i as u64) << 32 | k as u64;
@@ -161,6 +197,46 @@ impl SymmetricSymbolic {
     pub fn factor_entries(&self) -> usize {
         self.symbolic.len_val()
     }
+
+    /// Order of the matrix analysed.
+    pub fn n(&self) -> usize {
+        self.fwd.len()
+    }
+
+    /// The unknowns of A in the analysed order.
+    pub fn order(&self) -> &[usize] {
+        &self.fwd
+    }
+
+    /// The supernodes (`None` where faer kept a simplicial factor: a
+    /// pattern without elimination work).
+    pub fn supernodal(&self) -> Option<&SymbolicSupernodalCholesky<usize>> {
+        match self.symbolic.raw() {
+            SymbolicCholeskyRaw::Supernodal(s) => Some(s),
+            SymbolicCholeskyRaw::Simplicial(_) => None,
+        }
+    }
+}
+
+/// faer's AMD ordering of a symmetric pattern (both triangles stored).
+pub fn amd_order(a: SymbolicSparseColMatRef<'_, usize>) -> Result<Vec<usize>, String> {
+    let n = a.nrows();
+    let mut fwd = vec![0usize; n];
+    let mut inv = vec![0usize; n];
+    let mut mem = MemBuffer::try_new(amd::order_maybe_unsorted_scratch::<usize>(
+        n,
+        a.compute_nnz(),
+    ))
+    .map_err(|_| "symbolic analysis: out of memory".to_string())?;
+    amd::order_maybe_unsorted(
+        &mut fwd,
+        &mut inv,
+        a,
+        CholeskySymbolicParams::default().amd_params,
+        MemStack::new(&mut mem),
+    )
+    .map_err(|e| format!("symbolic analysis: {e:?}"))?;
+    Ok(fwd)
 }
 
 /// Which symmetric factorization.
@@ -246,6 +322,11 @@ impl SymmetricFactor {
             perm_fwd,
             perm_inv,
         })
+    }
+
+    /// The values of L (D on its diagonal for LDLᵀ), by supernodes.
+    pub fn values(&self) -> &[f64] {
+        &self.values
     }
 
     /// Solves A x = b in place: P A Pᵀ (P x) = P b.
@@ -338,12 +419,8 @@ impl SymmetricFactor {
 }
 
 impl Drop for SymmetricFactor {
-    /// The factor's buffer becomes the spare (the larger one is kept).
+    /// The factor's buffer becomes a spare.
     fn drop(&mut self) {
-        if let Ok(mut spare) = SPARE_FACTOR.lock()
-            && spare.capacity() < self.values.capacity()
-        {
-            *spare = std::mem::take(&mut self.values);
-        }
+        keep_spare(std::mem::take(&mut self.values));
     }
 }
