@@ -307,7 +307,9 @@ impl LinearSolver {
         let (guess, checks) = match self.last {
             Some(backend) => {
                 let (f, checks) =
-                    self.numeric_beside(backend, &s, &values, || Checks::of(&s, &values));
+                    self.numeric_beside(backend, &s, &values, backend.symmetric(), || {
+                        Checks::of(&s, &values)
+                    });
                 (Some((backend, f)), checks)
             }
             None => (None, Checks::of(&s, &values)),
@@ -335,7 +337,10 @@ impl LinearSolver {
             }
             let factored = match guess.take() {
                 Some((_, f)) => f,
-                None => self.numeric(backend, &s, &values, symmetric),
+                None => {
+                    self.numeric_beside(backend, &s, &values, symmetric, || ())
+                        .0
+                }
             };
             // The caller's solve beside the test's (two solves of one
             // factor, independent): kept if the test passes.
@@ -373,13 +378,16 @@ impl LinearSolver {
         Err(format!("no factorization passed: {}", reasons.join("; ")))
     }
 
-    /// [`LinearSolver::numeric`] with `beside` on another thread: beside
-    /// the whole factorization, or with the smaller half of a split one.
+    /// The numeric factorization by `backend` (split over two threads where
+    /// [`LinearSolver::split`] allows, else [`LinearSolver::numeric`]), with
+    /// `beside` on another thread: beside the whole factorization, or with
+    /// the smaller half of a split one.
     fn numeric_beside<R: Send>(
         &mut self,
         backend: Backend,
         s: &Arc<Structure>,
         values: &[f64],
+        symmetric: bool,
         beside: impl FnOnce() -> R + Send,
     ) -> (Result<Factorization, String>, R) {
         let split = match backend {
@@ -399,16 +407,13 @@ impl LinearSolver {
                 });
                 (f, side)
             }
-            Ok(None) => rayon::join(
-                || self.numeric(backend, s, values, backend.symmetric()),
-                beside,
-            ),
+            Ok(None) => rayon::join(|| self.numeric(backend, s, values, symmetric), beside),
             Err(e) => (Err(e), beside()),
         }
     }
 
-    /// The numeric factorization by `backend` (and the pattern's analysis
-    /// the first time), not yet checked. `symmetric` chooses the MUMPS
+    /// The numeric factorization by `backend` on one factor (and the
+    /// pattern's analysis the first time), not yet checked. `symmetric` chooses the MUMPS
     /// analysis; the faer backends know theirs.
     #[cfg_attr(not(feature = "mumps"), allow(unused_variables))]
     fn numeric(
@@ -454,17 +459,7 @@ impl LinearSolver {
             };
             return Ok(f);
         }
-        let split = if backend == Backend::Ldlt {
-            self.split(s)?
-        } else {
-            None
-        };
-        let factor = if let Some(split) = split {
-            set_spare_budget(split.stored_values());
-            self.stats.factor_entries = split.factor_entries();
-            let f = SplitFactor::new(&split, values, || ()).0?;
-            Factor::Split(split, f)
-        } else if backend.symmetric() {
+        let factor = if backend.symmetric() {
             let sym = self.whole(s)?;
             set_spare_budget(sym.factor_entries());
             self.stats.factor_entries = sym.factor_entries();
