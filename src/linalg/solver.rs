@@ -535,7 +535,7 @@ impl LinearSolver {
         if self.split.is_none() {
             self.split = shared(&SPLITS, s).map(Some);
         }
-        if self.split.is_none() && REFUSED.lock().is_ok_and(|r| r.contains(&s.id())) {
+        if self.split.is_none() && shared(&REFUSED, s).is_some() {
             self.split = Some(None);
         }
         if self.split.is_none() {
@@ -550,11 +550,8 @@ impl LinearSolver {
                     // Rebuilt if LBLᵀ takes over (0.3 GB at a million unknowns).
                     self.symmetric = None;
                 }
-                None => {
-                    if let Ok(mut refused) = REFUSED.lock() {
-                        refused.push(s.id());
-                    }
-                }
+                // Forgotten with the pattern, as the analyses are.
+                None => share(&REFUSED, s, s),
             }
             self.split = Some(found);
             self.stats.analysis_s += t.elapsed().as_secs_f64();
@@ -681,8 +678,9 @@ static ANALYSES: Analyses<SymmetricSymbolic> = Mutex::new(Vec::new());
 /// The same for the split analyses.
 static SPLITS: Analyses<SplitSymbolic> = Mutex::new(Vec::new());
 
-/// The patterns whose split was refused (no separator, or too much fill).
-static REFUSED: Mutex<Vec<u64>> = Mutex::new(Vec::new());
+/// The patterns whose split was refused (no separator, or too much fill),
+/// while a solver holds them.
+static REFUSED: Analyses<Structure> = Mutex::new(Vec::new());
 
 type Analyses<T> = Mutex<Vec<(u64, Weak<T>)>>;
 

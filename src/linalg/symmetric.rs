@@ -110,16 +110,23 @@ impl SymmetricSymbolic {
     /// The analysis of the whole pattern, in faer's AMD ordering.
     pub fn new(s: &Structure) -> Result<Self, String> {
         let n = s.n();
-        if u32::try_from(s.nnz()).is_err() || u32::try_from(n).is_err() {
-            return Err(format!("{} entries: more than 32-bit slots", s.nnz()));
-        }
+        Self::fits_32_bits(s)?;
         let a = SymbolicSparseColMatRef::new_checked(n, n, s.col_ptr(), None, s.row_idx());
         Self::with_order(s, amd_order(a)?)
+    }
+
+    /// The map from the permuted slots to A's is 32-bit (half the memory).
+    fn fits_32_bits(s: &Structure) -> Result<(), String> {
+        if u32::try_from(s.nnz()).is_err() || u32::try_from(s.n()).is_err() {
+            return Err(format!("{} entries: more than 32-bit slots", s.nnz()));
+        }
+        Ok(())
     }
 
     /// The analysis of the principal submatrix of A on the unknowns `fwd`,
     /// in that order (`fwd[i]`: the unknown of A at position i).
     pub fn with_order(s: &Structure, fwd: Vec<usize>) -> Result<Self, String> {
+        Self::fits_32_bits(s)?;
         let params = CholeskySymbolicParams {
             supernodal_flop_ratio_threshold: SupernodalThreshold::FORCE_SUPERNODAL,
             ..Default::default()

@@ -383,7 +383,12 @@ impl<'s> Recorder<'s> {
                 format!("{:.17e}", r.lambda_end),
                 format!("{:.6e}", r.length),
                 (r.pade as u8).to_string(),
-                format!("{:.3e}", r.end_residual),
+                // Empty where the end's residual was refused (NaN).
+                if r.end_residual.is_finite() {
+                    format!("{:.3e}", r.end_residual)
+                } else {
+                    String::new()
+                },
                 (r.geometric as u8).to_string(),
                 r.factorizations.to_string(),
                 r.solves.to_string(),

@@ -360,6 +360,13 @@ pub fn load(path: &Path, text: &str, kind: Kind) -> Result<FrictionScene> {
             format!("must not exceed solver.t_end = {t_end}, got {dt}"),
         ));
     }
+    let rows = t_end / dt;
+    if rows > 1e6 {
+        return Err(c.fail(
+            "output.dt",
+            format!("gives {rows:.3e} history rows up to solver.t_end (at most 1e6)"),
+        ));
+    }
     Ok(FrictionScene {
         file: path.to_path_buf(),
         kind,

@@ -264,6 +264,28 @@ pub fn correct<P: ContinuationProblem + ?Sized>(
     lu: &mut LinearSolver,
     stats: &mut Stats,
 ) -> Result<Corrected> {
+    let mut start = f64::NAN;
+    correct_noting_start(
+        problem, u, lambda, constraint, settings, metric, lu, stats, &mut start,
+    )
+}
+
+/// [`correct`], also when it fails: `start_residual` receives the relative
+/// residual at the start point once it is evaluated (it stays as it was when
+/// the residual itself is refused, e.g. a contact node missed). A step's
+/// end residual is reported even when its correction diverges.
+#[allow(clippy::too_many_arguments)]
+pub fn correct_noting_start<P: ContinuationProblem + ?Sized>(
+    problem: &mut P,
+    u: Vec<f64>,
+    lambda: f64,
+    constraint: &Constraint,
+    settings: &Settings,
+    metric: &Metric,
+    lu: &mut LinearSolver,
+    stats: &mut Stats,
+    start_residual: &mut f64,
+) -> Result<Corrected> {
     let mut u = u;
     let mut l = lambda;
     let step = settings.step;
@@ -290,7 +312,6 @@ pub fn correct<P: ContinuationProblem + ?Sized>(
         ut
     };
     let mut it = 0;
-    let mut start_residual = f64::NAN;
     let mut prev_res = f64::NAN;
     loop {
         // Fresh: the tangent at the iterate, before its residual.
@@ -312,7 +333,7 @@ pub fn correct<P: ContinuationProblem + ?Sized>(
         };
         let res = metric.residual_norm(&r) / scale;
         if it == 0 {
-            start_residual = res;
+            *start_residual = res;
         }
         // Reuse: refactorize after an iteration that contracted too little.
         if !fresh && it > 0 && res > contraction * prev_res && res > settings.tol {
@@ -337,7 +358,7 @@ pub fn correct<P: ContinuationProblem + ?Sized>(
                 u,
                 lambda: l,
                 iterations: it,
-                start_residual,
+                start_residual: *start_residual,
             });
         }
         if it >= settings.max_iter || !res.is_finite() || res > settings.max_residual {

@@ -591,7 +591,8 @@ pub(crate) fn series_step<P: ContinuationProblem + ?Sized>(
                 reference: None,
             }
         };
-        let attempt = correct::correct(
+        let mut start_residual = f64::NAN;
+        let attempt = correct::correct_noting_start(
             problem,
             u_end,
             l_end,
@@ -600,9 +601,12 @@ pub(crate) fn series_step<P: ContinuationProblem + ?Sized>(
             metric,
             lu,
             stats,
+            &mut start_residual,
         );
         if first {
-            step.end_residual = attempt.as_ref().map_or(f64::INFINITY, |e| e.start_residual);
+            // NaN where the end's residual was refused (a contact node
+            // missed): steps.csv leaves the field empty.
+            step.end_residual = start_residual;
             first = false;
         }
         match attempt {

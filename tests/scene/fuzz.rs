@@ -194,3 +194,69 @@ fn mutated_scenes_give_errors_or_finite_results_never_panics() {
         "the mutations must exercise both paths"
     );
 }
+
+/// The same mutations on the three friction scenes (time-dependent DAEs):
+/// an error naming the file, or a run (at most 400 steps) without a panic,
+/// finite histories and step rows, and a diagnosis for every stop that is
+/// not the end or a located singularity. (An output grid of 1e300 rows
+/// used to panic on its allocation.)
+#[test]
+fn mutated_friction_scenes_give_errors_or_finite_results_never_panics() {
+    let root = env!("CARGO_MANIFEST_DIR");
+    let dir = std::env::temp_dir().join("anm-fuzz-friction");
+    std::fs::create_dir_all(&dir).unwrap();
+    let bases = ["friction-1d", "friction-plane", "friction-roller"];
+    let mut rng = Rng(0xD1B5_4A32_D192_ED03);
+    let (mut rejected, mut ran) = (0, 0);
+    let cases = 600;
+    for case in 0..cases {
+        let scene = format!("{root}/scenes/{}.toml", bases[case % bases.len()]);
+        let mut doc: Value = toml::from_str(&std::fs::read_to_string(&scene).unwrap()).unwrap();
+        let what = mutate(&mut rng, &mut doc);
+        if let Some(s) = doc.get_mut("solver").and_then(|s| s.as_table_mut()) {
+            s.insert("max_steps".into(), Value::Integer(400));
+        }
+        let p = dir.join(format!("case{case}.toml"));
+        std::fs::write(&p, toml::to_string(&doc).unwrap()).unwrap();
+        let result = catch_unwind(AssertUnwindSafe(|| {
+            let text = anm::scene::read(&p)?;
+            let kind = anm::scene::kind(&p, &text)?;
+            let s = anm::scene::friction::load(&p, &text, kind)?;
+            anm::model::friction_run::run(&s, None, false)
+        }));
+        match result {
+            Err(_) => panic!("case {case}: {what}: panic"),
+            Ok(Err(e)) => {
+                let msg = e.to_string();
+                assert!(
+                    msg.contains(&format!("case{case}.toml")),
+                    "case {case}: {what}: error does not name the scene: {msg}"
+                );
+                rejected += 1;
+            }
+            Ok(Ok(r)) => {
+                assert!(
+                    r.history
+                        .iter()
+                        .chain(&r.steps)
+                        .flatten()
+                        .all(|x| x.is_finite()),
+                    "case {case}: {what}: non-finite value in the output"
+                );
+                if !matches!(r.stop.reason.as_str(), "end" | "singularity") {
+                    assert!(
+                        r.stop.message.is_some(),
+                        "case {case}: {what}: stop {} without diagnosis",
+                        r.stop.reason
+                    );
+                }
+                ran += 1;
+            }
+        }
+    }
+    println!("{cases} mutated friction scenes: {rejected} rejected, {ran} ran");
+    assert!(
+        rejected > 100 && ran > 50,
+        "the mutations must exercise both paths"
+    );
+}
