@@ -5,6 +5,9 @@
 # tests and the reference tests. Works on a fresh Debian 12 machine with Rust.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+# A build from scratch gains nothing from incremental caches (writing them
+# made the crate's test build 9% slower: 144 → 132 s without).
+export CARGO_INCREMENTAL="${CARGO_INCREMENTAL:-0}"
 
 if [ -f ci/install-reference.sh ]; then
   bash ci/install-reference.sh

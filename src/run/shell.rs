@@ -270,8 +270,18 @@ fn grid_points(
 /// model's characteristic length, lambda against its range.
 fn chord(model: &ShellModel, du: &[f64], dl: f64, lambda_scale: f64) -> f64 {
     let s = model.scales();
-    (du.iter().zip(&s).map(|(d, s)| (d / s).powi(2)).sum::<f64>() + (dl / lambda_scale).powi(2))
-        .sqrt()
+    let parts = || {
+        du.iter()
+            .zip(&s)
+            .map(|(d, s)| d / s)
+            .chain([dl / lambda_scale])
+    };
+    // Scaled by the largest part: no overflow of the squares.
+    let big = parts().fold(0.0f64, |m, x| m.max(x.abs()));
+    if big == 0.0 || !big.is_finite() {
+        return big;
+    }
+    big * parts().map(|x| (x / big).powi(2)).sum::<f64>().sqrt()
 }
 
 fn run_inner(
@@ -626,7 +636,9 @@ fn run_inner(
                 });
             }
             let l_end = cfg.lambda_end;
-            let scale = chord(&model, &u1, 1.0, l_end.abs());
+            let u_end: Vec<f64> = u1.iter().map(|x| x * l_end).collect();
+            // Arclength per unit of lambda.
+            let scale = chord(&model, &u_end, l_end, l_end.abs()) / l_end.abs();
             for g in rec.grid_between(0.0, l_end) {
                 let u: Vec<f64> = u1.iter().map(|x| x * g).collect();
                 let full = model.expand(&u, g);
@@ -640,9 +652,8 @@ fn run_inner(
                 )?;
             }
             rec.state.arclength = scale * l_end.abs();
-            let u: Vec<f64> = u1.iter().map(|x| x * l_end).collect();
             rec.state.contact.update(&model.events(&zero, 0.0)?);
-            let contact_switches = rec.state.contact.update(&model.events(&u, l_end)?);
+            let contact_switches = rec.state.contact.update(&model.events(&u_end, l_end)?);
             rec.step(&StepRow {
                 step: 1,
                 lambda_start: 0.0,
@@ -657,7 +668,7 @@ fn run_inner(
                 events: vec![],
                 contact_switches,
             })?;
-            (PathStop::End { lambda: l_end }, stats, (u, l_end))
+            (PathStop::End { lambda: l_end }, stats, (u_end, l_end))
         }
     };
     let path_s = path_start.elapsed().as_secs_f64();

@@ -194,7 +194,16 @@ pub fn buckle(
 ) -> Result<BuckleReport> {
     let start = std::time::Instant::now();
     let state = match (base, scene.friction.is_some()) {
-        (Base::Lambda(l), false) => lambda_base_state(scene, l)?,
+        (Base::Lambda(l), false) => {
+            if !l.is_finite() {
+                return Err(Error::Invalid {
+                    file: scene.file.clone(),
+                    key: "--lambda".into(),
+                    problem: format!("must be finite, got {l}"),
+                });
+            }
+            lambda_base_state(scene, l)?
+        }
         (Base::Time(t), true) => {
             if !(t > 0.0 && t.is_finite()) {
                 return Err(Error::Invalid {

@@ -523,3 +523,17 @@ fn audit_rejects_friction_options_and_bad_values() {
         assert!(!out.exists(), "no output for rejected input");
     }
 }
+
+/// `anm buckle --lambda` must be finite: NaN used to run the path forever
+/// (no step reaches lambda = NaN).
+#[test]
+fn buckle_about_a_non_finite_lambda_is_rejected() {
+    let p = scene("buckle-nan.toml", &mesh_path(), &[]);
+    let s = load(&p).unwrap();
+    for l in [f64::NAN, f64::INFINITY] {
+        expect_err(
+            anm::study::buckle::buckle(&s, anm::study::buckle::Base::Lambda(l), 2, None),
+            &["buckle-nan.toml", "--lambda", "must be finite"],
+        );
+    }
+}
