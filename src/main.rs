@@ -44,8 +44,9 @@ enum Command {
     /// one buckle_mode_K.vtu per mode.
     Buckle {
         scene: PathBuf,
-        /// lambda of the base state (0: the initial state).
-        #[arg(long, default_value_t = 0.0)]
+        /// lambda of the base state (0: the initial state; negative: the
+        /// load reversed, e.g. `--lambda -0.5`).
+        #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
         lambda: f64,
         /// A scene with [friction]: the time (s) of the base state, reached
         /// by the run in time; sticking friction nodes are tied there.
