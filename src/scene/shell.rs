@@ -1788,7 +1788,7 @@ fn solver(c: &Checker, s: &RawSolver, size: f64) -> Result<(Method, Continuation
     let cfg = ContinuationConfig {
         order,
         linear,
-        eps: c.positive("solver.eps", s.eps.unwrap_or(1e-8))?,
+        eps: c.within("solver.eps", s.eps.unwrap_or(1e-8), 1e-16, 1.0)?,
         lambda_end,
         max_steps,
         pade: s.pade.unwrap_or(false),

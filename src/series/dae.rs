@@ -411,6 +411,15 @@ impl<P: DaeProblem + ?Sized> Engine<'_, P> {
     fn newton(&mut self, u: &[f64], vz: &mut [f64], t: f64, tol: f64, step: usize) -> Result<f64> {
         let mut res = self.residual0(u, vz, t);
         self.stats.residual_evaluations += 1;
+        let non_finite = || Error::NonFinite {
+            step,
+            param: "t",
+            at: t,
+            what: "the residual of the consistent (v, z) (Newton)".into(),
+        };
+        if !res.is_finite() {
+            return Err(non_finite());
+        }
         let mut it = 0;
         while res > tol {
             if it >= 100 {
@@ -450,6 +459,11 @@ impl<P: DaeProblem + ?Sized> Engine<'_, P> {
                 if r.is_finite() && (r < res || damping < 1e-10) {
                     res = r;
                     break;
+                }
+                // Non-finite however short the step (u itself overflows
+                // the law, e.g. u0 = 1e308): stop, do not halve forever.
+                if damping < 1e-10 {
+                    return Err(non_finite());
                 }
                 damping *= 0.5;
             }

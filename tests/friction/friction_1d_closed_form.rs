@@ -164,3 +164,23 @@ fn error_against_the_unregularized_curve_shrinks_with_omega() {
         "errors do not shrink: {errors:?}"
     );
 }
+
+/// A start whose displacement overflows the law (u0 = 1e308) stops with a
+/// diagnosis at t = 0: the initialization's backtracking used to halve its
+/// step forever on a residual that is non-finite however short the step.
+#[test]
+fn overflowing_start_stops_with_a_diagnosis() {
+    let scene = friction_scene("friction-1d.toml", &[("initial.u0", "1e308")]);
+    let r = run(&scene, None, false).unwrap();
+    println!("{:?}", r.stop);
+    assert_eq!(r.stop.reason, "non_finite");
+    assert!(
+        r.stop
+            .message
+            .as_deref()
+            .is_some_and(|m| m.contains("t = 0")),
+        "{:?}",
+        r.stop
+    );
+    assert!(r.history.iter().flatten().all(|x| x.is_finite()));
+}
