@@ -269,19 +269,14 @@ fn grid_points(
 /// Scaled length of a chord (du, dlambda): displacements against the
 /// model's characteristic length, lambda against its range.
 fn chord(model: &ShellModel, du: &[f64], dl: f64, lambda_scale: f64) -> f64 {
-    let s = model.scales();
-    let parts = || {
-        du.iter()
-            .zip(&s)
-            .map(|(d, s)| d / s)
-            .chain([dl / lambda_scale])
-    };
-    // Scaled by the largest part: no overflow of the squares.
-    let big = parts().fold(0.0f64, |m, x| m.max(x.abs()));
-    if big == 0.0 || !big.is_finite() {
-        return big;
-    }
-    big * parts().map(|x| (x / big).powi(2)).sum::<f64>().sqrt()
+    let parts: Vec<f64> = du
+        .iter()
+        .zip(model.scales())
+        .map(|(d, s)| d / s)
+        .chain([dl / lambda_scale])
+        .collect();
+    // Scaled by its largest part where the squares would overflow.
+    crate::linalg::norm(&parts)
 }
 
 fn run_inner(
