@@ -18,8 +18,9 @@ fi
 # the reference ones is the same code with or without them (the two
 # `cfg(not(feature = "reference"))` stubs in src/study/bench.rs and the HDF5
 # stubs aside), so running the suite twice cost a build and ~2.5 minutes of
-# tests (5m51 + 2m30 of a 17.5-minute run) for nothing; `cargo check`
-# compiles the default build, stubs included, in ~2.5 minutes.
+# tests for nothing; `cargo check` compiles the default build, stubs
+# included, in ~2.5 minutes. Measured on fresh clones (packages installed):
+# 1,064 s with both test runs, 831 s with the check.
 echo "== cargo check (default features)"
 cargo check --locked --all-targets
 echo "== cargo test --features reference"
