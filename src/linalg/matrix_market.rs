@@ -60,6 +60,9 @@ pub fn read(path: &Path) -> Result<SparseMatrix, String> {
     let mut size = None;
     let mut m = SparseMatrix::new(0);
     let mut seen = 0usize;
+    // Rows and columns holding an entry (a symmetric entry holds both of
+    // its mirror's too).
+    let (mut rows_seen, mut cols_seen): (Vec<bool>, Vec<bool>) = (vec![], vec![]);
     for (i, line) in lines {
         let line = line.map_err(|e| e.to_string())?;
         let t = line.trim();
@@ -82,8 +85,24 @@ pub fn read(path: &Path) -> Result<SparseMatrix, String> {
                         "size line: expected `n n entries` of a square matrix",
                     ));
                 }
+                // Each entry fills at most two rows (one, or its mirror of a
+                // symmetric matrix): with fewer, a row is empty and the
+                // matrix singular, whatever its values. Refused here, before
+                // anything of size n (a size line of 1e9 with 4 entries ran
+                // the analysis into memory exhaustion).
+                if v[0] > 2 * v[2] {
+                    return Err(bad(
+                        i,
+                        &format!(
+                            "size line: {} entries cannot fill {} rows (structurally singular)",
+                            v[2], v[0]
+                        ),
+                    ));
+                }
                 size = Some((v[0], v[2]));
                 m = SparseMatrix::new(v[0]);
+                rows_seen = vec![false; v[0]];
+                cols_seen = vec![false; v[0]];
             }
             Some((n, _)) => {
                 let entry = || -> Option<(usize, usize, f64)> {
@@ -99,8 +118,20 @@ pub fn read(path: &Path) -> Result<SparseMatrix, String> {
                 m.add(r - 1, c - 1, v);
                 if symmetric && r != c {
                     m.add(c - 1, r - 1, v);
+                    (rows_seen[c - 1], cols_seen[r - 1]) = (true, true);
                 }
+                (rows_seen[r - 1], cols_seen[c - 1]) = (true, true);
                 seen += 1;
+            }
+        }
+    }
+    if size.is_some_and(|(_, entries)| entries == seen) {
+        for (what, seen) in [("row", &rows_seen), ("column", &cols_seen)] {
+            if let Some(k) = seen.iter().position(|&x| !x) {
+                return Err(format!(
+                    "{what} {} holds no entry: the matrix is structurally singular",
+                    k + 1
+                ));
             }
         }
     }
@@ -139,6 +170,31 @@ mod tests {
         .unwrap();
         let e = read(&dir.join("bad.mtx")).unwrap_err();
         assert!(e.contains("line 3") && e.contains("outside"), "{e}");
+        // A size line no entry count can fill (it ran the analysis of a
+        // 1e9 × 1e9 matrix into memory exhaustion), an empty row, an
+        // empty column.
+        for (name, text, want) in [
+            (
+                "huge",
+                "%%MatrixMarket matrix coordinate real symmetric\n1000000000 1000000000 1\n1 1 4.0\n",
+                "line 2: size line: 1 entries cannot fill 1000000000 rows",
+            ),
+            (
+                "row",
+                "%%MatrixMarket matrix coordinate real symmetric\n3 3 2\n1 1 4.0\n3 3 1.0\n",
+                "row 2 holds no entry",
+            ),
+            (
+                "column",
+                "%%MatrixMarket matrix coordinate real general\n2 2 2\n1 1 4.0\n2 1 1.0\n",
+                "column 2 holds no entry",
+            ),
+        ] {
+            let p = dir.join(format!("{name}.mtx"));
+            std::fs::write(&p, text).unwrap();
+            let e = read(&p).unwrap_err();
+            assert!(e.contains(want), "{name}: {e}");
+        }
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }
