@@ -193,6 +193,14 @@ pub fn buckle(
     out_dir: Option<&Path>,
 ) -> Result<BuckleReport> {
     let start = std::time::Instant::now();
+    let bad_modes = |problem: String| Error::Invalid {
+        file: scene.file.clone(),
+        key: "--modes".into(),
+        problem,
+    };
+    if count == 0 {
+        return Err(bad_modes("must be at least 1".into()));
+    }
     let state = match (base, scene.friction.is_some()) {
         (Base::Lambda(l), false) => {
             if !l.is_finite() {
@@ -238,6 +246,11 @@ pub fn buckle(
         steps: path_steps,
     } = state;
     let n = model.ndof();
+    if count > n {
+        return Err(bad_modes(format!(
+            "{count} modes asked of a model with {n} unknowns"
+        )));
+    }
     let cfg = scene.solver.clone();
     let scale = cfg.lambda_end.abs();
     let mut lu = LinearSolver::new(cfg.linear);

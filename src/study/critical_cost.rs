@@ -61,13 +61,30 @@ pub fn anm(scene: &ShellScene) -> Result<Location> {
     })
 }
 
+/// Most Newton load increments [`newton_bisection`] takes up to lambda_end.
+const MAX_INCREMENTS: f64 = 1e6;
+
 /// Newton increments of `increment` in lambda and bisection on the
 /// negative-pivot count (module docs) to `tol` relative.
 pub fn newton_bisection(scene: &ShellScene, increment: f64, tol: f64) -> Result<Location> {
     let start = Instant::now();
+    let cfg = &scene.solver;
+    // At most a million increments up to lambda_end (as the output grids):
+    // --locate 1e-300 took increments forever (b + 1e-300 == b).
+    let increments = cfg.lambda_end.abs() / increment;
+    if !(increments <= MAX_INCREMENTS) {
+        return Err(Error::Invalid {
+            file: scene.file.clone(),
+            key: "--locate".into(),
+            problem: format!(
+                "increments of {increment:e} up to lambda_end = {} are {increments:.3e} \
+                 (at most {MAX_INCREMENTS:e})",
+                cfg.lambda_end
+            ),
+        });
+    }
     let mut model = build_model(scene)?;
     model.length_scale = scene.length_scale;
-    let cfg = &scene.solver;
     let metric = Metric::for_problem(&model, cfg.lambda_end.abs())?;
     let mut lu = LinearSolver::new(cfg.linear);
     let mut stats = Stats::default();

@@ -537,3 +537,29 @@ fn buckle_about_a_non_finite_lambda_is_rejected() {
         );
     }
 }
+
+/// `anm buckle --modes` between 1 and the model's unknowns (0 printed an
+/// empty table with exit 0), and `--locate` increments at most a million up
+/// to lambda_end (1e-300 took increments forever: b + 1e-300 == b).
+#[test]
+fn buckle_mode_counts_and_locate_increments_out_of_range_are_rejected() {
+    use anm::study::buckle::{Base, buckle};
+    let p = scene("buckle-modes.toml", &mesh_path(), &[]);
+    let s = load(&p).unwrap();
+    expect_err(
+        buckle(&s, Base::Lambda(0.0), 0, None),
+        &["buckle-modes.toml", "--modes", "at least 1"],
+    );
+    expect_err(
+        buckle(&s, Base::Lambda(0.0), 1_000_000, None),
+        &[
+            "buckle-modes.toml",
+            "--modes",
+            "1000000 modes asked of a model with",
+        ],
+    );
+    expect_err(
+        anm::study::critical_cost::newton_bisection(&s, 1e-300, 1e-6),
+        &["buckle-modes.toml", "--locate", "at most 1e6"],
+    );
+}
