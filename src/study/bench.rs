@@ -80,10 +80,21 @@ impl std::str::FromStr for Method {
         let parts: Vec<&str> = s.split(':').collect();
         let num = |x: &str| x.parse::<f64>().map_err(|e| format!("`{x}`: {e}"));
         match parts.as_slice() {
-            ["anm", order, eps] => Ok(Method::Anm {
-                order: order.parse().map_err(|e| format!("`{order}`: {e}"))?,
-                eps: num(eps)?,
-            }),
+            ["anm", order, eps] => {
+                // The bounds of a friction scene's solver.order and
+                // solver.eps (order 0 indexed past the series: a panic).
+                let order: usize = order.parse().map_err(|e| format!("`{order}`: {e}"))?;
+                let eps = num(eps)?;
+                if !(2..=200).contains(&order) {
+                    return Err(format!(
+                        "`{s}`: the order must lie in [2, 200], got {order}"
+                    ));
+                }
+                if !(1e-16..=1.0).contains(&eps) {
+                    return Err(format!("`{s}`: eps must lie in [1e-16, 1], got {eps:e}"));
+                }
+                Ok(Method::Anm { order, eps })
+            }
             ["ida", rtol] => Ok(Method::Ida { rtol: num(rtol)? }),
             [name, rtol] if name.starts_with("diffsol-") => Ok(Method::Diffsol {
                 method: name["diffsol-".len()..].parse()?,

@@ -200,3 +200,30 @@ fn factor_rejects_bad_matrices_and_options() {
     assert_eq!(v["negative_pivots"], 0);
     assert!(v["backward_error"].as_f64().unwrap() <= 1e-15);
 }
+
+/// `anm time --method anm:ORDER:EPS` within a friction scene's bounds of
+/// solver.order and solver.eps: order 0 panicked (a series index past its
+/// end), eps 0 or NaN ran as if meaningful.
+#[test]
+fn time_rejects_anm_methods_outside_the_scene_bounds() {
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/friction-1d.toml");
+    for (method, needle) in [
+        ("anm:0:1e-9", "the order must lie in [2, 200], got 0"),
+        ("anm:201:1e-9", "the order must lie in [2, 200], got 201"),
+        ("anm:15:0", "eps must lie in [1e-16, 1]"),
+        ("anm:15:nan", "eps must lie in [1e-16, 1]"),
+    ] {
+        let o = Command::new(env!("CARGO_BIN_EXE_anm"))
+            .args(["time", "--repeat", "1", "--method", method])
+            .arg(&scene)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_ne!(o.status.code(), Some(0), "{method}: {err}");
+        assert!(!err.contains("panicked"), "{method}: {err}");
+        assert!(
+            err.contains(method) && err.contains(needle),
+            "{method}: {err}"
+        );
+    }
+}
