@@ -125,18 +125,18 @@ pub fn read(path: &Path) -> Result<SparseMatrix, String> {
             }
         }
     }
-    if size.is_some_and(|(_, entries)| entries == seen) {
-        for (what, seen) in [("row", &rows_seen), ("column", &cols_seen)] {
-            if let Some(k) = seen.iter().position(|&x| !x) {
-                return Err(format!(
-                    "{what} {} holds no entry: the matrix is structurally singular",
-                    k + 1
-                ));
-            }
-        }
-    }
     match size {
-        Some((_, entries)) if entries == seen => Ok(m),
+        Some((_, entries)) if entries == seen => {
+            for (what, seen) in [("row", &rows_seen), ("column", &cols_seen)] {
+                if let Some(k) = seen.iter().position(|&x| !x) {
+                    return Err(format!(
+                        "{what} {} holds no entry: the matrix is structurally singular",
+                        k + 1
+                    ));
+                }
+            }
+            Ok(m)
+        }
         Some((_, entries)) => Err(format!("{seen} entries, the size line says {entries}")),
         None => Err("no size line".into()),
     }

@@ -20,6 +20,12 @@ use crate::series::dae::Stepping;
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
 
+/// Accepted `solver.order` of a friction scene (and of `anm time`/`bench`
+/// methods `anm:ORDER:EPS`).
+pub const ORDERS: std::ops::RangeInclusive<usize> = 2..=200;
+/// Accepted `solver.eps` of a friction scene (and of those methods).
+pub const EPS: std::ops::RangeInclusive<f64> = 1e-16..=1.0;
+
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct Raw {
@@ -311,13 +317,19 @@ pub fn load(path: &Path, text: &str, kind: Kind) -> Result<FrictionScene> {
             format!("friction scenes support \"anm\" only, got \"{m}\""),
         ));
     }
-    if s.order < 2 {
-        return Err(c.fail("solver.order", format!("must be >= 2, got {}", s.order)));
+    if s.order < *ORDERS.start() as i64 {
+        return Err(c.fail(
+            "solver.order",
+            format!("must be >= {}, got {}", ORDERS.start(), s.order),
+        ));
     }
-    if s.order > 200 {
-        return Err(c.fail("solver.order", format!("must be <= 200, got {}", s.order)));
+    if s.order > *ORDERS.end() as i64 {
+        return Err(c.fail(
+            "solver.order",
+            format!("must be <= {}, got {}", ORDERS.end(), s.order),
+        ));
     }
-    let eps = c.within("solver.eps", s.eps, 1e-16, 1.0)?;
+    let eps = c.within("solver.eps", s.eps, *EPS.start(), *EPS.end())?;
     let t_end = c.positive("solver.t_end", s.t_end)?;
     let max_steps = match s.max_steps {
         Some(m) if m < 1 => {

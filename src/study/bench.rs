@@ -83,15 +83,22 @@ impl std::str::FromStr for Method {
             ["anm", order, eps] => {
                 // The bounds of a friction scene's solver.order and
                 // solver.eps (order 0 indexed past the series: a panic).
+                use crate::scene::friction::{EPS, ORDERS};
                 let order: usize = order.parse().map_err(|e| format!("`{order}`: {e}"))?;
                 let eps = num(eps)?;
-                if !(2..=200).contains(&order) {
+                if !ORDERS.contains(&order) {
                     return Err(format!(
-                        "`{s}`: the order must lie in [2, 200], got {order}"
+                        "`{s}`: the order must lie in [{}, {}], got {order}",
+                        ORDERS.start(),
+                        ORDERS.end()
                     ));
                 }
-                if !(1e-16..=1.0).contains(&eps) {
-                    return Err(format!("`{s}`: eps must lie in [1e-16, 1], got {eps:e}"));
+                if !EPS.contains(&eps) {
+                    return Err(format!(
+                        "`{s}`: eps must lie in [{:e}, {}], got {eps:e}",
+                        EPS.start(),
+                        EPS.end()
+                    ));
                 }
                 Ok(Method::Anm { order, eps })
             }
