@@ -14,6 +14,14 @@ use anm::linalg::SparseMatrix;
 use anm::linalg::mpi;
 use anm::linalg::mumps::{self, Mumps};
 
+/// A fresh directory `anm-mumps-<what>-XXXXXX`, removed when dropped.
+fn scratch(what: &str) -> tempfile::TempDir {
+    tempfile::Builder::new()
+        .prefix(&format!("anm-mumps-{what}-"))
+        .tempdir()
+        .expect("a temporary directory")
+}
+
 /// A square matrix as coordinates, duplicates allowed.
 struct Coo {
     n: usize,
@@ -184,14 +192,14 @@ fn struct_layout_matches_the_installed_header() {
         ));
     }
     c.push_str("return 0;\n}\n");
-    let dir = std::env::temp_dir().join(format!("anm-mumps-layout-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let tmp = scratch("layout");
+    let dir = tmp.path();
     std::fs::write(dir.join("layout.c"), c).unwrap();
     let cc = Command::new("cc")
         .arg("layout.c")
         .arg("-o")
         .arg("layout")
-        .current_dir(&dir)
+        .current_dir(dir)
         .output()
         .expect("a C compiler `cc` (build-essential) to check the MUMPS struct layout");
     assert!(
@@ -201,7 +209,6 @@ fn struct_layout_matches_the_installed_header() {
     );
     let out = Command::new(dir.join("layout")).output().unwrap();
     let text = String::from_utf8(out.stdout).unwrap();
-    std::fs::remove_dir_all(&dir).ok();
     let mut lines = text.lines();
     assert_eq!(lines.next(), Some(format!("size {size}").as_str()));
     let mut checked = 0;
@@ -435,10 +442,10 @@ fn two_ranks_hold_the_same_solution() {
         return;
     };
     let exe = std::env::current_exe().unwrap();
-    let dir = std::env::temp_dir().join(format!("anm-mumps-ranks-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let tmp = scratch("ranks");
+    let dir = tmp.path();
     let mut cmd = mpirun_job(&mpirun);
-    cmd.env("ANM_MUMPS_RANK_DIR", &dir);
+    cmd.env("ANM_MUMPS_RANK_DIR", dir);
     let mut child = cmd
         .args(["--allow-run-as-root", "--oversubscribe", "-n", "2"])
         .arg(&exe)
@@ -485,7 +492,6 @@ fn two_ranks_hold_the_same_solution() {
             .unwrap_or_else(|e| panic!("no line from rank {r} ({e}):\n{out}\n{err}"))
     };
     let lines = [read(0), read(1)];
-    std::fs::remove_dir_all(&dir).ok();
     assert!(lines.iter().all(|l| l.starts_with(MARK)), "{lines:?}");
     let field = |l: &str, k: &str| -> String {
         l.split_whitespace()
@@ -653,8 +659,8 @@ fn anm_run_on_two_ranks_matches_faer() {
         return;
     };
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
-    let dir = std::env::temp_dir().join(format!("anm-mumps-run-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let tmp = scratch("run");
+    let dir = tmp.path();
     let text = std::fs::read_to_string(root.join("scenes/plate-cylinder-coarse.toml"))
         .unwrap()
         .replace("../meshes/", &format!("{}/meshes/", root.display()));
@@ -709,5 +715,4 @@ fn anm_run_on_two_ranks_matches_faer() {
         serde_json::from_str(&std::fs::read_to_string(mumps_out.join("summary.json")).unwrap())
             .unwrap();
     assert!(v["stats"]["linear"]["mumps"].as_u64().unwrap() > 0);
-    std::fs::remove_dir_all(&dir).ok();
 }

@@ -154,8 +154,11 @@ mod tests {
             vec![0.0, 0.5, 3.0],
         ]);
         let (s, v) = a.compressed(None).unwrap();
-        let dir = std::env::temp_dir().join(format!("anm-mm-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
+        let tmp = tempfile::Builder::new()
+            .prefix("anm-mm-")
+            .tempdir()
+            .unwrap();
+        let dir = tmp.path();
         for symmetric in [true, false] {
             let p = dir.join(format!("a-{symmetric}.mtx"));
             write(&p, &s, &v, symmetric).unwrap();
@@ -195,6 +198,5 @@ mod tests {
             let e = read(&p).unwrap_err();
             assert!(e.contains(want), "{name}: {e}");
         }
-        std::fs::remove_dir_all(&dir).unwrap();
     }
 }

@@ -246,8 +246,11 @@ mod tests {
     #[test]
     fn written_mesh_reads_back() {
         let m = structured::rectangle(0.0, 2.0, -0.1, 0.1, 6, 2);
-        let dir = std::env::temp_dir().join(format!("anm-gmsh-write-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
+        let tmp = tempfile::Builder::new()
+            .prefix("anm-gmsh-write-")
+            .tempdir()
+            .unwrap();
+        let dir = tmp.path();
         let path = dir.join("strip.msh");
         write(&path, &m, "strip", &[("clamp", &m.groups["s0"])]).unwrap();
         // The reader numbers nodes in order of first use: compare positions.
@@ -270,7 +273,6 @@ mod tests {
             back.group("strip", &path, "k").unwrap().len(),
             m.nodes.len()
         );
-        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]
@@ -282,12 +284,14 @@ mod tests {
         ring_nodes.sort_unstable();
         ring_nodes.dedup();
         m.groups.insert("ring".into(), ring_nodes);
-        let dir = std::env::temp_dir().join(format!("anm-gmsh-write-all-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
+        let tmp = tempfile::Builder::new()
+            .prefix("anm-gmsh-write-")
+            .tempdir()
+            .unwrap();
+        let dir = tmp.path();
         let path = dir.join("annulus.msh");
         write_mesh(&path, &m).unwrap();
         let back = gmsh::read(&path).unwrap();
-        std::fs::remove_dir_all(&dir).unwrap();
         let at = |mesh: &crate::mesh::Mesh, n: usize| -> [f64; 3] { mesh.nodes[n].into() };
         assert_eq!(back.nodes.len(), m.nodes.len());
         assert_eq!(back.quads.len(), m.quads.len());

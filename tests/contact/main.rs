@@ -1,6 +1,9 @@
 //! Shell contact with rigid obstacles (eq. 3).
 //! One test binary per area (DESIGN §1): the files below are its modules.
 
+#[path = "../common/scratch.rs"]
+#[allow(dead_code)]
+mod scratch;
 #[path = "../common/shell.rs"]
 mod shell_common;
 

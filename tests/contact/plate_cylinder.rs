@@ -42,9 +42,10 @@ fn plate_cylinder_mesh_convergence() {
         "plate-cylinder-40x4.msh",
         "plate-cylinder-80x8.msh",
     ] {
-        let dir = std::env::temp_dir().join(format!("anm-pc-{mesh}"));
-        let p = scene_with_mesh(mesh, &dir);
-        let r = run_scene(&p, &dir, false).unwrap();
+        let tmp = crate::scratch::scratch(&format!("pc-{mesh}"));
+        let dir = tmp.path();
+        let p = scene_with_mesh(mesh, dir);
+        let r = run_scene(&p, dir, false).unwrap();
         println!(
             "{mesh}: stop {:?}, steps {}, factorizations {}, wall {:.1} s",
             r.stop, r.steps, r.factorizations, r.wall_s
@@ -105,8 +106,8 @@ fn gmsh_mesh_has_the_groups_rows_and_orientation() {
 /// CI run: the coarse (0.1 m) mesh to lambda = 1 through the scene driver.
 #[test]
 fn plate_cylinder_scene_runs_and_writes_outputs() {
-    let dir = std::env::temp_dir().join("anm-pc-ci");
-    let _ = std::fs::remove_dir_all(&dir);
+    let tmp = crate::scratch::scratch("pc-ci");
+    let dir = tmp.path().join("out");
     let p = scene_with_mesh("plate-cylinder-20x2.msh", &dir);
     let r = run_scene(&p, &dir, false).unwrap();
     println!("{}", serde_json::to_string_pretty(&r).unwrap());
@@ -150,8 +151,9 @@ fn plate_cylinder_scene_runs_and_writes_outputs() {
 #[test]
 fn ldlt_and_lu_follow_the_same_path() {
     use anm::linalg::{Backend, Choice};
-    let dir = std::env::temp_dir().join("anm-pc-backends");
-    let p = scene_with_mesh("plate-cylinder-20x2.msh", &dir);
+    let tmp = crate::scratch::scratch("pc-backends");
+    let dir = tmp.path();
+    let p = scene_with_mesh("plate-cylinder-20x2.msh", dir);
     let mut scene = load(&p).unwrap();
     scene.output.plot = false;
     scene.output.vtk_every = 0;
@@ -188,8 +190,9 @@ fn ldlt_and_lu_follow_the_same_path() {
 /// 3.4e-7 of eta = 1e-10 and 5.9e-7, 2.4e-7 of Newton.
 #[test]
 fn the_penalty_law_follows_the_small_eta_limit_in_a_quarter_of_the_steps() {
-    let dir = std::env::temp_dir().join("anm-pc-penalty");
-    let p = scene_with_mesh("plate-cylinder-20x2.msh", &dir);
+    let tmp = crate::scratch::scratch("pc-penalty");
+    let dir = tmp.path();
+    let p = scene_with_mesh("plate-cylinder-20x2.msh", dir);
     let text = std::fs::read_to_string(&p).unwrap();
     let with = |name: &str, edits: &[(&str, &str)]| {
         let mut t = text.clone();

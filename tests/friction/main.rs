@@ -3,6 +3,9 @@
 
 #[path = "../common/mod.rs"]
 mod common;
+#[path = "../common/scratch.rs"]
+#[allow(dead_code)]
+mod scratch;
 
 mod diffsol_reference;
 mod friction_1d_closed_form;

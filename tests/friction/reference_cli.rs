@@ -3,8 +3,9 @@
 //! names in summary.json, and bad tolerances or method names end with a
 //! clear error naming the option, a non-zero exit and no panic.
 
+use crate::scratch::ScratchFile;
 use anm::reference::counters::Counters;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Command, Output};
 
 fn anm(args: &[&str]) -> Output {
@@ -15,10 +16,10 @@ fn anm(args: &[&str]) -> Output {
         .expect("anm runs")
 }
 
-fn scratch(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("anm-refcli-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    d
+/// An output directory `name` for a run, in a temporary directory of its
+/// own (not created: the run creates it).
+fn scratch(name: &str) -> ScratchFile {
+    ScratchFile::new("refcli", name)
 }
 
 fn counters(dir: &Path) -> serde_json::Map<String, serde_json::Value> {

@@ -166,10 +166,11 @@ fn capstan(degrees: f64, f: f64) -> anm::scene::shell::ShellScene {
                 -400.0 * theta.sin()
             ),
         );
-    let dir = std::env::temp_dir().join(format!("anm-capstan-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("temp dir");
-    let path = dir.join(format!("capstan-{degrees}-{f}.toml"));
-    std::fs::write(&path, text).expect("write scene");
+    let path = crate::scratch::ScratchFile::with_text(
+        "capstan",
+        &format!("capstan-{degrees}-{f}.toml"),
+        &text,
+    );
     let mut sc = load(&path).expect("scene loads");
     sc.friction.as_mut().expect("friction").law.f = f;
     sc

@@ -24,14 +24,10 @@ fn coarse_conveying() -> anm::scene::shell::ShellScene {
         .replace("element_length = 0.05", "element_length = 0.1")
         .replace("arc_element_length = 0.01", "arc_element_length = 0.03")
         .replace("divisions_across = 8", "divisions_across = 2");
-    // One file per call: the tests run in parallel, and one writing the
-    // file while another loads it would hand the other a partial scene.
-    static CALLS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
-    let call = CALLS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-    let dir = std::env::temp_dir().join(format!("anm-conveying-{}-{call}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("temp dir");
-    let path = dir.join("strip-conveying-coarse.toml");
-    std::fs::write(&path, text).expect("write scene");
+    // One directory per call: the tests run in parallel, and one writing
+    // the file while another loads it would hand the other a partial scene.
+    let path =
+        crate::scratch::ScratchFile::with_text("conveying", "strip-conveying-coarse.toml", &text);
     load(&path).expect("scene loads")
 }
 

@@ -5,4 +5,7 @@
 mod common;
 mod dolfinx_plate_cylinder;
 mod ida;
+#[path = "../common/scratch.rs"]
+#[allow(dead_code)]
+mod scratch;
 mod shell_ida;

@@ -21,10 +21,7 @@ fn coarse_capstan(name: &str) -> anm::scene::shell::ShellScene {
             "line_force = [0.0, -400.0, 0.0]",
             "line_force = [0.0, 0.0, -400.0]",
         );
-    let dir = std::env::temp_dir().join(format!("anm-shell-ida-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("temp dir");
-    let path = dir.join(format!("{name}.toml"));
-    std::fs::write(&path, text).expect("write scene");
+    let path = crate::scratch::ScratchFile::with_text("shell-ida", &format!("{name}.toml"), &text);
     load(&path).expect("scene loads")
 }
 
@@ -151,10 +148,7 @@ fn anm_and_ida_stop_where_the_strip_breaks_away() {
     let text =
         std::fs::read_to_string("scenes/verification/capstan-breakaway.toml").expect("scene");
     let text = text.replace("divisions = [1, 64]", "divisions = [1, 16]");
-    let dir = std::env::temp_dir().join(format!("anm-shell-ida-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("temp dir");
-    let path = dir.join("breakaway.toml");
-    std::fs::write(&path, text).expect("write scene");
+    let path = crate::scratch::ScratchFile::with_text("shell-ida", "breakaway.toml", &text);
     let sc = load(&path).expect("scene loads");
     let f = sc.friction.as_ref().expect("friction").law.f;
     let closed = 20.0 * (f * std::f64::consts::PI).exp() / 150.0;

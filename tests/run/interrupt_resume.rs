@@ -4,14 +4,15 @@
 //! `anm run --resume DIR` ends with the same results as an uninterrupted run
 //! (1e-12 relative to each column's largest value).
 
+use crate::scratch::ScratchFile;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::{Duration, Instant};
 
-fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join("anm-interrupt").join(name);
-    let _ = std::fs::remove_dir_all(&d);
-    d
+/// An output directory `name` in a temporary directory of its own (not
+/// created: the run creates it).
+fn tmp(name: &str) -> ScratchFile {
+    ScratchFile::new("interrupt", name)
 }
 
 fn scene() -> PathBuf {

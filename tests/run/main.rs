@@ -4,6 +4,9 @@
 
 #[path = "../common/mod.rs"]
 mod common;
+#[path = "../common/scratch.rs"]
+#[allow(dead_code)]
+mod scratch;
 
 mod interrupt_resume;
 mod stability;

@@ -7,10 +7,7 @@
 use anm::run::{RunReport, run_loaded};
 
 fn run(text: &str, name: &str) -> RunReport {
-    let dir = std::env::temp_dir().join("anm-units");
-    std::fs::create_dir_all(&dir).unwrap();
-    let p = dir.join(name);
-    std::fs::write(&p, text).unwrap();
+    let p = crate::scratch::ScratchFile::with_text("units", name, text);
     let s = anm::scene::shell::load(&p).unwrap();
     let r = run_loaded(&s, None, false).unwrap();
     assert_eq!(r.stop.reason, "end", "{name}: {:?}", r.stop);

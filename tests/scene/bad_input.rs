@@ -1,19 +1,16 @@
 //! Bad scene input: each case must give a clear error naming the file and the
 //! key, a non-zero exit code, no panic, and no output files.
 
-use std::path::{Path, PathBuf};
+use crate::scratch::{ScratchFile, scratch};
+use std::path::Path;
 use std::process::Command;
 
-fn scene_with(edit: impl Fn(&str) -> String, name: &str) -> PathBuf {
+fn scene_with(edit: impl Fn(&str) -> String, name: &str) -> ScratchFile {
     let base = std::fs::read_to_string(
         Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/friction-plane.toml"),
     )
     .unwrap();
-    let dir = std::env::temp_dir().join(format!("anm-bad-{}-{name}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let path = dir.join(format!("{name}.toml"));
-    std::fs::write(&path, edit(&base)).unwrap();
-    path
+    ScratchFile::with_text("bad", &format!("{name}.toml"), &edit(&base))
 }
 
 /// Runs `anm run SCENE -o OUT` and returns (exit code, stderr, out dir exists).
@@ -67,7 +64,7 @@ fn wrong_type() {
 
 #[test]
 fn missing_file() {
-    let p = std::env::temp_dir().join("anm-no-such-scene.toml");
+    let p = ScratchFile::new("missing", "anm-no-such-scene.toml");
     let (code, err, _) = run(&p);
     assert_ne!(code, 0);
     assert!(
@@ -154,8 +151,8 @@ fn valid_scenes_pass_check() {
 /// with the file or the option named, no panic.
 #[test]
 fn factor_rejects_bad_matrices_and_options() {
-    let dir = std::env::temp_dir().join("anm-factor-bad-input");
-    std::fs::create_dir_all(&dir).unwrap();
+    let tmp = scratch("factor-bad-input");
+    let dir = tmp.path();
     let bad = dir.join("bad.mtx");
     std::fs::write(
         &bad,

@@ -23,10 +23,7 @@ fn accepted(parse: impl Fn(&Path, &str) -> String, text: &str, table: &str) -> V
         text.replacen(&header, &format!("{header}\nzzz_unknown = 1"), 1)
     };
     assert_ne!(injected, text, "nothing injected for {table}");
-    let dir = std::env::temp_dir().join("anm-scene-docs");
-    std::fs::create_dir_all(&dir).unwrap();
-    let path = dir.join("scene.toml");
-    std::fs::write(&path, &injected).unwrap();
+    let path = crate::scratch::ScratchFile::with_text("scene-docs", "scene.toml", &injected);
     let message = parse(&path, &injected);
     let expected = message
         .split("expected")

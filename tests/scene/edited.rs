@@ -1,22 +1,19 @@
 //! Shared by the shell-scene input tests: a scene file with text edits
 //! applied, and the check that loading it fails naming the file and key.
 
+use crate::scratch::ScratchFile;
 use anm::scene::shell::load;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
-/// `base` with `edits` (old, new) applied, written as `dir/name` under the
-/// temporary directory.
-pub fn edited(base: &str, dir: &str, name: &str, edits: &[(&str, &str)]) -> PathBuf {
+/// `base` with `edits` (old, new) applied, written as `name` in a fresh
+/// temporary directory `anm-<what>-XXXXXX` (removed with the value).
+pub fn edited(base: &str, what: &str, name: &str, edits: &[(&str, &str)]) -> ScratchFile {
     let mut text = std::fs::read_to_string(base).unwrap();
     for (old, new) in edits {
         assert!(text.contains(old), "edit `{old}` does not apply");
         text = text.replacen(old, new, 1);
     }
-    let d = std::env::temp_dir().join(dir);
-    std::fs::create_dir_all(&d).unwrap();
-    let p = d.join(name);
-    std::fs::write(&p, text).unwrap();
-    p
+    ScratchFile::with_text(what, name, &text)
 }
 
 /// Loading `path` fails as invalid input, naming the file, `key` and `part`.

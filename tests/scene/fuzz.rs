@@ -114,8 +114,8 @@ fn mutate(rng: &mut Rng, doc: &mut Value) -> String {
 #[test]
 fn mutated_scenes_give_errors_or_finite_results_never_panics() {
     let root = env!("CARGO_MANIFEST_DIR");
-    let dir = std::env::temp_dir().join("anm-fuzz");
-    std::fs::create_dir_all(&dir).unwrap();
+    let tmp = crate::scratch::scratch("fuzz");
+    let dir = tmp.path();
     let bases = [
         (
             format!("{root}/scenes/plate-cylinder-coarse.toml"),
@@ -203,8 +203,8 @@ fn mutated_scenes_give_errors_or_finite_results_never_panics() {
 #[test]
 fn mutated_friction_scenes_give_errors_or_finite_results_never_panics() {
     let root = env!("CARGO_MANIFEST_DIR");
-    let dir = std::env::temp_dir().join("anm-fuzz-friction");
-    std::fs::create_dir_all(&dir).unwrap();
+    let tmp = crate::scratch::scratch("fuzz-friction");
+    let dir = tmp.path();
     let bases = ["friction-1d", "friction-plane", "friction-roller"];
     let mut rng = Rng(0xD1B5_4A32_D192_ED03);
     let (mut rejected, mut ran) = (0, 0);
@@ -269,8 +269,8 @@ fn mutated_friction_scenes_give_errors_or_finite_results_never_panics() {
 #[test]
 fn corrupted_meshes_give_errors_never_panics() {
     let root = env!("CARGO_MANIFEST_DIR");
-    let dir = std::env::temp_dir().join("anm-fuzz-mesh");
-    std::fs::create_dir_all(&dir).unwrap();
+    let tmp = crate::scratch::scratch("fuzz-mesh");
+    let dir = tmp.path();
     let lines: Vec<String> =
         std::fs::read_to_string(format!("{root}/meshes/plate-cylinder-20x2.msh"))
             .unwrap()

@@ -5,6 +5,9 @@ mod bad_input;
 mod docs;
 mod edited;
 mod fuzz;
+#[path = "../common/scratch.rs"]
+#[allow(dead_code)]
+mod scratch;
 mod shell_bad_input;
 mod shell_friction_input;
 mod strip_mesh_input;

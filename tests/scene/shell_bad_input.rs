@@ -1,20 +1,19 @@
 //! Bad input for shell scenes and meshes: each case must stop with a clear
 //! error naming the file and the key, element or line (never a panic).
 
+use crate::scratch::ScratchFile;
 use anm::Error;
 use anm::scene::shell::load;
 use std::path::{Path, PathBuf};
 
 const MESH: &str = "meshes/plate-cylinder-20x2.msh";
 
-fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join("anm-shell-bad-input");
-    std::fs::create_dir_all(&d).unwrap();
-    d.join(name)
+fn tmp(name: &str) -> ScratchFile {
+    ScratchFile::new("shell-bad-input", name)
 }
 
 /// The default scene with `edits` (old, new) applied and the mesh `mesh`.
-fn scene(name: &str, mesh: &Path, edits: &[(&str, &str)]) -> PathBuf {
+fn scene(name: &str, mesh: &Path, edits: &[(&str, &str)]) -> ScratchFile {
     let mut text = std::fs::read_to_string("scenes/plate-cylinder.toml").unwrap();
     text = text.replace("../meshes/plate-cylinder.msh", mesh.to_str().unwrap());
     for (old, new) in edits {
@@ -32,7 +31,7 @@ fn mesh_path() -> PathBuf {
 
 /// The mesh with its first quadrilateral's node list rewritten by `f`;
 /// returns the path and the 1-based line of that element.
-fn edited_mesh(name: &str, f: impl Fn(&[&str]) -> Vec<String>) -> (PathBuf, usize) {
+fn edited_mesh(name: &str, f: impl Fn(&[&str]) -> Vec<String>) -> (ScratchFile, usize) {
     let text = std::fs::read_to_string(mesh_path()).unwrap();
     let mut lines: Vec<String> = text.lines().map(String::from).collect();
     // Find the element block of type 3 and its first element.

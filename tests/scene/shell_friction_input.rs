@@ -5,17 +5,18 @@
 //! tests/scene/docs.rs).
 
 use super::edited::{edited, expect_invalid};
+use crate::scratch::ScratchFile;
 use anm::Error;
 use anm::contact::FrictionLaw;
 use anm::scene::shell::load;
 use anm::shell::ramp::Ramp;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 const BASE: &str = "tests/data/shell-friction.toml";
 
 /// The base scene with `edits` (old, new) applied.
-fn scene(name: &str, edits: &[(&str, &str)]) -> PathBuf {
-    edited(BASE, "anm-shell-friction-input", name, edits)
+fn scene(name: &str, edits: &[(&str, &str)]) -> ScratchFile {
+    edited(BASE, "shell-friction-input", name, edits)
 }
 
 #[test]
@@ -246,10 +247,7 @@ fn time_step_is_read_and_bad_values_are_named() {
     let end = text[start..].find("\n\n").unwrap() + start;
     let mut text = format!("{}{}", &text[..start], &text[end..]);
     text = text.replacen("[solver]\n", "[solver]\ntime_step = \"implicit\"\n", 1);
-    let d = std::env::temp_dir().join("anm-shell-friction-input");
-    std::fs::create_dir_all(&d).unwrap();
-    let p = d.join("static-time-step.toml");
-    std::fs::write(&p, text).unwrap();
+    let p = ScratchFile::with_text("shell-friction-input", "static-time-step.toml", &text);
     expect_invalid(&p, "solver.time_step", "[friction]");
 }
 
@@ -317,8 +315,6 @@ fn a_load_ramp_is_read_and_bad_ones_are_named() {
         "force = [0.0, 0.0, -0.5]\nramp = [0.0, 0.4]",
         1,
     );
-    let d = std::env::temp_dir().join("anm-shell-friction-input");
-    let p = d.join("own-ramp-static.toml");
-    std::fs::write(&p, without).unwrap();
+    let p = ScratchFile::with_text("shell-friction-input", "own-ramp-static.toml", &without);
     expect_invalid(&p, "load[0].ramp", "applies to scenes in time");
 }

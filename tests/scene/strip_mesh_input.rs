@@ -4,14 +4,15 @@
 //! errors naming the file and the key.
 
 use super::edited::{edited, expect_invalid};
+use crate::scratch::ScratchFile;
 use anm::scene::shell::{Quantity, load};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 const BASE: &str = "scenes/strip-conveying.toml";
 
 /// The base scene with `edits` (old, new) applied.
-fn scene(name: &str, edits: &[(&str, &str)]) -> PathBuf {
-    edited(BASE, "anm-strip-mesh-input", name, edits)
+fn scene(name: &str, edits: &[(&str, &str)]) -> ScratchFile {
+    edited(BASE, "strip-mesh-input", name, edits)
 }
 
 /// The wrap angles of the scene's rollers (30, 90, 60 degrees) from the
@@ -244,7 +245,7 @@ fn a_crowned_roll_is_read_and_bad_crowns_name_the_key() {
         ),
     ];
     for (name, old, new, key, part) in cases {
-        let p = edited(base, "anm-crown-input", name, &[(old, new)]);
+        let p = edited(base, "crown-input", name, &[(old, new)]);
         expect_invalid(&p, key, part);
     }
 }

@@ -300,8 +300,8 @@ fn bad_branch_keys_and_an_unstable_buckling_state_are_clear_errors() {
         env!("CARGO_MANIFEST_DIR")
     ))
     .unwrap();
-    let dir = std::env::temp_dir().join("anm-bifurcation-bad-input");
-    std::fs::create_dir_all(&dir).unwrap();
+    let tmp = crate::scratch::scratch("bifurcation-bad-input");
+    let dir = tmp.path();
     let cases = [
         ("branch = \"tertiary\"", "solver.branch"),
         ("branch_direction = -1.0", "solver.branch_direction"),

@@ -1,6 +1,9 @@
 //! Shell element and verification cases (closed forms, published tables).
 //! One test binary per area (DESIGN §1): the files below are its modules.
 
+#[path = "../common/scratch.rs"]
+#[allow(dead_code)]
+mod scratch;
 #[path = "../common/shell.rs"]
 mod shell_common;
 

@@ -47,10 +47,7 @@ lambda_step = 0.5
 
 #[test]
 fn membrane_stresses_follow_hookes_law_in_plane_strain_along_y() {
-    let dir = std::env::temp_dir().join(format!("anm-membrane-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let path = dir.join("plate.toml");
-    std::fs::write(&path, SCENE).unwrap();
+    let path = crate::scratch::ScratchFile::with_text("membrane", "plate.toml", SCENE);
     let sc = load(&path).expect("scene loads");
     let model = build_model(&sc).expect("model");
     let (e, nu) = (210e9, 0.3);

@@ -88,17 +88,12 @@ fn plate_buckling_stress_matches_the_dolfinx_slepc_solid() {
     );
     let mut errors = Vec::new();
     for n in [16, 32, 64] {
-        let file = std::env::temp_dir().join(format!(
-            "anm-plate-buckling-{n}-{}.toml",
-            std::process::id()
-        ));
-        std::fs::write(
-            &file,
-            source.replace("divisions = [16, 16]", &format!("divisions = [{n}, {n}]")),
-        )
-        .expect("temp scene");
+        let file = crate::scratch::ScratchFile::with_text(
+            "plate-buckling",
+            &format!("{n}.toml"),
+            &source.replace("divisions = [16, 16]", &format!("divisions = [{n}, {n}]")),
+        );
         let scn = load(&file).expect("refined scene");
-        let _ = std::fs::remove_file(&file);
         let b = buckle(&scn, Base::Lambda(0.0), 1, None).expect("buckle");
         let sigma_ours = b.modes[0].mu * n_line / t;
         println!(

@@ -121,20 +121,15 @@ fn sheet_wrinkling_matches_the_dolfinx_slepc_solid() {
     );
     let mut ours = vec![];
     for n in [40usize, 48, 60] {
-        let file = std::env::temp_dir().join(format!(
-            "anm-sheet-wrinkling-{n}-{}.toml",
-            std::process::id()
-        ));
-        std::fs::write(
-            &file,
-            source.replace(
+        let file = crate::scratch::ScratchFile::with_text(
+            "sheet-wrinkling",
+            &format!("{n}.toml"),
+            &source.replace(
                 "divisions = [100, 40]",
                 &format!("divisions = [{}, {n}]", n * 5 / 2),
             ),
-        )
-        .expect("temp scene");
+        );
         let scn = load(&file).expect("refined scene");
-        let _ = std::fs::remove_file(&file);
         let b = buckle(&scn, Base::Lambda(lambda0), 2, None).expect("buckle");
         // The pair's mode even in y (a crest on the centre line, an odd
         // count): the one the quarter 3D model holds.

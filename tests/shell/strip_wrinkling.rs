@@ -9,11 +9,14 @@
 //! the span before the roll), and its location against linearized
 //! buckling (`anm buckle`) about the path's state just before it.
 
+use crate::scratch::ScratchFile;
 use anm::run::shell::run_loaded;
 use anm::scene::shell::load;
 use anm::study::buckle::{Base, buckle};
 
-fn coarse(lambda_end: f64) -> anm::scene::shell::ShellScene {
+/// The coarse scene, with its file (kept while the scene runs: a run reads
+/// the scene's text for its checkpoint).
+fn coarse(lambda_end: f64) -> (anm::scene::shell::ShellScene, ScratchFile) {
     let root = env!("CARGO_MANIFEST_DIR");
     let text = std::fs::read_to_string(format!("{root}/scenes/strip-wrinkling.toml")).unwrap();
     let text = text
@@ -21,16 +24,17 @@ fn coarse(lambda_end: f64) -> anm::scene::shell::ShellScene {
         .replace("element_length = 0.05", "element_length = 0.1")
         .replace("arc_element_length = 0.025", "arc_element_length = 0.05")
         .replace("lambda_end = 1.5", &format!("lambda_end = {lambda_end}"));
-    let dir = std::env::temp_dir().join("anm-strip-wrinkling");
-    std::fs::create_dir_all(&dir).unwrap();
-    let p = dir.join(format!("coarse-{lambda_end}.toml"));
-    std::fs::write(&p, text).unwrap();
-    load(&p).expect("scene")
+    let p = ScratchFile::with_text(
+        "strip-wrinkling",
+        &format!("coarse-{lambda_end}.toml"),
+        &text,
+    );
+    (load(&p).expect("scene"), p)
 }
 
 #[test]
 fn strip_over_a_crowned_roll_wrinkles_in_the_span_before_it() {
-    let sc = coarse(1.5);
+    let (sc, _file) = coarse(1.5);
     let r = run_loaded(&sc, None, false).expect("run");
     assert_eq!(r.stop.reason, "end");
     // Frictionless wrap: T_in = T_out = 200 N/m x 1 m x lambda.
@@ -91,7 +95,7 @@ fn strip_over_a_crowned_roll_wrinkles_in_the_span_before_it() {
     let mut errors = vec![];
     for gap in [1e-3, 1e-4] {
         let lb = (1.0 - gap) * onset;
-        let b = buckle(&coarse(1.5), Base::Lambda(lb), 4, None).expect("buckle");
+        let b = buckle(&coarse(1.5).0, Base::Lambda(lb), 4, None).expect("buckle");
         let m = b
             .modes
             .iter()
