@@ -3,6 +3,7 @@
 //! assembler builds once from its connectivity (large shells: no triplet list,
 //! no sort per factorization).
 
+use rayon::prelude::*;
 use std::borrow::Cow;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, OnceLock};
@@ -24,6 +25,9 @@ pub struct Structure {
 }
 
 static NEXT_ID: AtomicU64 = AtomicU64::new(1);
+
+/// Values per task of the passes over a matrix's values on the thread pool.
+const PARALLEL_CHUNK: usize = 1 << 16;
 
 impl Structure {
     /// The pattern of the positions `coords` in an n × n matrix (duplicates
@@ -174,9 +178,16 @@ impl SparseMatrix {
 
     /// A zero matrix on `structure`.
     pub fn with_structure(structure: Arc<Structure>) -> Self {
+        // Zeroed on every thread: on one, the writes and the page faults of
+        // a fresh block (5 MB at 12,600 unknowns) were ~1 ms of every
+        // tangent with the other thread idle.
+        let mut values = Vec::with_capacity(structure.nnz());
+        rayon::iter::repeat_n(0.0, structure.nnz())
+            .with_min_len(PARALLEL_CHUNK)
+            .collect_into_vec(&mut values);
         Self {
             n: structure.n,
-            values: vec![0.0; structure.nnz()],
+            values,
             structure: Some(structure),
             extra: Vec::new(),
         }
@@ -270,8 +281,13 @@ impl SparseMatrix {
     /// The first entry that is not finite, if any (a scan of the stored
     /// values first: the entries' positions are looked up only then).
     pub fn first_non_finite(&self) -> Option<(usize, usize, f64)> {
-        let finite =
-            self.values.iter().all(|v| v.is_finite()) && self.extra.iter().all(|t| t.2.is_finite());
+        // By chunks, on every thread, each chunk tested whole (no early
+        // exit inside it: the test vectorizes).
+        let finite = self
+            .values
+            .par_chunks(PARALLEL_CHUNK)
+            .all(|c| c.iter().fold(true, |all, v| all & v.is_finite()))
+            && self.extra.iter().all(|t| t.2.is_finite());
         if finite {
             None
         } else {
@@ -367,6 +383,32 @@ mod tests {
         assert_eq!(a.mul_vec(&[1.0, 1.0, 1.0]), vec![3.0, -1.0, 5.0]);
         assert!(c.transpose_slots().is_none(), "(2, 1) has no (1, 2)");
         assert!(s.transpose_slots().is_some());
+    }
+
+    /// A pattern of several chunks of the parallel passes: the values
+    /// start zeroed, and a non-finite value is found wherever it sits (past
+    /// the first chunk, in the last one, among the loose triplets).
+    #[test]
+    fn non_finite_entries_are_found_in_any_chunk() {
+        let n = 3 * PARALLEL_CHUNK + 5;
+        let s = Arc::new(Structure::from_coords(n, (0..n).map(|i| (i, i))).unwrap());
+        let clean = SparseMatrix::with_structure(Arc::clone(&s));
+        assert!(clean.values.len() == n && clean.values.iter().all(|&v| v == 0.0));
+        assert_eq!(clean.first_non_finite(), None);
+        for (i, bad) in [
+            (PARALLEL_CHUNK + 7, f64::NAN),
+            (n - 1, f64::INFINITY),
+            (0, f64::NEG_INFINITY),
+        ] {
+            let mut a = SparseMatrix::with_structure(Arc::clone(&s));
+            a.add(i, i, bad);
+            let (r, c, v) = a.first_non_finite().expect("found");
+            assert_eq!((r, c), (i, i));
+            assert!(!v.is_finite() && v.is_nan() == bad.is_nan());
+        }
+        let mut loose = SparseMatrix::with_structure(Arc::clone(&s));
+        loose.add(0, 1, f64::NAN);
+        assert_eq!(loose.first_non_finite().map(|t| (t.0, t.1)), Some((0, 1)));
     }
 
     #[test]

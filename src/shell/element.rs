@@ -331,9 +331,14 @@ impl ShellElement {
         self.kmap = map;
     }
 
-    /// Prefetches the map (fe::prefetch).
+    /// Prefetches the map (fe::prefetch), where the series read it packed:
+    /// a shared map is read from the loop's unpacked copy
+    /// ([`FullMapCache`]), which stays in cache, so its packed values would
+    /// be 51 lines fetched per element and order for nothing.
     pub fn prefetch_map(&self) {
-        self.kmap.prefetch();
+        if !self.map_shared {
+            self.kmap.prefetch();
+        }
     }
 
     /// Prefetches what the internal force at a state reads (fe::prefetch):
