@@ -311,7 +311,7 @@ fn run_inner(
     // Wall time spent before a resume (0 for a fresh run).
     let wall_before = rec.state.wall_s_before;
     let scene_file = std::fs::canonicalize(&scene.file).unwrap_or(scene.file.clone());
-    let scene_text = crate::scene::read(&scene.file)?;
+    let scene_text = &scene.text;
     let bar = progress_bar(progress);
     let show = |lambda: f64, stats: &Stats, what: &str| {
         if let Some(b) = &bar {

@@ -380,6 +380,9 @@ pub struct OutputSpec {
 #[derive(Clone, Debug)]
 pub struct ShellScene {
     pub file: PathBuf,
+    /// The file's text as loaded: a run's checkpoint records it (a resume
+    /// refuses a changed scene), without reading the file again.
+    pub text: String,
     pub description: Option<String>,
     pub mesh: Mesh,
     pub directors: Vec<Vec3>,
@@ -694,6 +697,7 @@ pub fn load(path: &Path) -> Result<ShellScene> {
     Ok(ShellScene {
         branch,
         file: path.to_path_buf(),
+        text,
         description: raw.scene.description,
         directors,
         material: Material { young, poisson },

@@ -14,9 +14,9 @@ use anm::run::shell::run_loaded;
 use anm::scene::shell::load;
 use anm::study::buckle::{Base, buckle};
 
-/// The coarse scene, with its file (kept while the scene runs: a run reads
-/// the scene's text for its checkpoint).
-fn coarse(lambda_end: f64) -> (anm::scene::shell::ShellScene, ScratchFile) {
+/// The coarse scene, loaded from a temporary file that is gone once it
+/// returns (a loaded scene runs without its file).
+fn coarse(lambda_end: f64) -> anm::scene::shell::ShellScene {
     let root = env!("CARGO_MANIFEST_DIR");
     let text = std::fs::read_to_string(format!("{root}/scenes/strip-wrinkling.toml")).unwrap();
     let text = text
@@ -29,12 +29,12 @@ fn coarse(lambda_end: f64) -> (anm::scene::shell::ShellScene, ScratchFile) {
         &format!("coarse-{lambda_end}.toml"),
         &text,
     );
-    (load(&p).expect("scene"), p)
+    load(&p).expect("scene")
 }
 
 #[test]
 fn strip_over_a_crowned_roll_wrinkles_in_the_span_before_it() {
-    let (sc, _file) = coarse(1.5);
+    let sc = coarse(1.5);
     let r = run_loaded(&sc, None, false).expect("run");
     assert_eq!(r.stop.reason, "end");
     // Frictionless wrap: T_in = T_out = 200 N/m x 1 m x lambda.
@@ -95,7 +95,7 @@ fn strip_over_a_crowned_roll_wrinkles_in_the_span_before_it() {
     let mut errors = vec![];
     for gap in [1e-3, 1e-4] {
         let lb = (1.0 - gap) * onset;
-        let b = buckle(&coarse(1.5).0, Base::Lambda(lb), 4, None).expect("buckle");
+        let b = buckle(&coarse(1.5), Base::Lambda(lb), 4, None).expect("buckle");
         let m = b
             .modes
             .iter()
