@@ -506,7 +506,7 @@ fn run_inner(
                 rec.state.wall_s_before = wall_before + start.elapsed().as_secs_f64();
                 rec.checkpoint(&RunCheckpointRef {
                     scene_file: &scene_file,
-                    scene_text: &scene_text,
+                    scene_text,
                     path: &path.checkpoint(),
                     recorder: &rec.state,
                 })?;
