@@ -317,7 +317,11 @@ mod tests {
 
     #[test]
     fn draw_writes_the_labels() {
-        let path = std::env::temp_dir().join(format!("anm-plot-{}.svg", std::process::id()));
+        let tmp = tempfile::Builder::new()
+            .prefix("anm-plot-")
+            .tempdir()
+            .unwrap();
+        let path = tmp.path().join("plot.svg");
         let line: Vec<(f64, f64)> = (0..=50)
             .map(|i| (i as f64 / 50.0, 2e-4 * i as f64 / 50.0 + 1e-4))
             .collect();
@@ -351,9 +355,9 @@ mod tests {
         )
         .unwrap();
         let svg = std::fs::read_to_string(&path).unwrap();
-        if std::env::var_os("ANM_KEEP_PLOT").is_none() {
-            std::fs::remove_file(&path).unwrap();
-        } else {
+        if std::env::var_os("ANM_KEEP_PLOT").is_some() {
+            // Kept to be looked at: the directory outlives the test.
+            let _ = tmp.keep();
             eprintln!("{}", path.display());
         }
         for text in ["0.0", "1.0", "1.0e-4", "3.0e-4", "1e-8", "1e-2", "t (s)"] {

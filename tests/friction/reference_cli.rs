@@ -74,7 +74,6 @@ fn summaries_share_counter_names() {
         println!("{name}: {c:?}; steps.csv rows {rows}");
         assert!(steps > 0);
         assert_eq!(steps as usize, rows, "{name}: steps vs steps.csv");
-        let _ = std::fs::remove_dir_all(&dir);
     }
 }
 

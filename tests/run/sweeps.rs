@@ -20,20 +20,13 @@
 //! Without GNU parallel the test says so and skips step 3, unless CI=true,
 //! where it fails (ci/install-reference.sh installs it).
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Command, Output};
 
 const ANM: &str = env!("CARGO_BIN_EXE_anm");
 
 fn root() -> &'static Path {
     Path::new(env!("CARGO_MANIFEST_DIR"))
-}
-
-fn scratch(name: &str) -> PathBuf {
-    let d = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("sweeps-{name}"));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
 }
 
 fn ok(what: &str, out: Output) -> String {
@@ -170,7 +163,8 @@ fn have_parallel() -> bool {
 /// item files, by GNU parallel on 2 workers, and (with `slurm`) through the
 /// Slurm array script; compares as the module doc says.
 fn check_sweep(name: &str, sweep: &[&str], outputs: &Outputs, slurm: bool) {
-    let dir = scratch(name);
+    let tmp = crate::scratch::scratch(&format!("sweeps-{name}"));
+    let dir = tmp.path();
     let list = ok("--list-items", anm(&[sweep, &["--list-items"]].concat()));
     let ids: Vec<String> = list
         .lines()
@@ -317,8 +311,8 @@ fn sweeps_item_by_item_merge_to_the_single_process_tables() {
 
 #[test]
 fn an_item_refuses_a_folder_of_another_sweep_and_a_missing_item() {
-    let dir = scratch("refuse");
-    let d = dir.to_str().unwrap();
+    let tmp = crate::scratch::scratch("sweeps-refuse");
+    let d = tmp.path().to_str().unwrap();
     let a = ["audit", "scenes/friction-1d.toml", "--omega", "0.3,0.1"];
     ok("item 0", anm(&[&a[..], &["--item", "0", "-o", d]].concat()));
     // Another sweep into the same folder.
@@ -360,7 +354,8 @@ fn an_item_refuses_a_folder_of_another_sweep_and_a_missing_item() {
 /// unknowns, steps and stop (the other columns are timings and memory).
 #[test]
 fn scaling_items_merge_to_the_single_process_table() {
-    let dir = scratch("scaling");
+    let tmp = crate::scratch::scratch("sweeps-scaling");
+    let dir = tmp.path();
     let d = |s: &str| dir.join(s).to_str().unwrap().to_string();
     let sweep = ["bench", "--scaling", "20x2,40x4", "--scaling-steps", "2"];
     let list = ok(

@@ -499,7 +499,6 @@ fn audit_rejects_friction_options_and_bad_values() {
         (vec![], vec!["nothing to sweep", "--eta"]),
     ] {
         let out = tmp("audit-rejected");
-        let _ = std::fs::remove_dir_all(&out);
         let o = std::process::Command::new(env!("CARGO_BIN_EXE_anm"))
             .arg("audit")
             .arg(&scene)

@@ -17,20 +17,18 @@ use anm::scene::shell::load;
 use anm::series::ContinuationProblem;
 use anm::series::continuation::run;
 use anm::shell::ShellModel;
-use std::path::Path;
 use std::time::Instant;
 
+/// The scene with mesh `mesh`, loaded from a temporary file that is gone
+/// once it returns (a loaded scene runs without its file).
 fn scene_with_mesh(mesh: &str) -> anm::scene::shell::ShellScene {
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("step-cost-{mesh}"));
-    std::fs::create_dir_all(&dir).unwrap();
     let text = std::fs::read_to_string("scenes/plate-cylinder.toml")
         .unwrap()
         .replace(
             "../meshes/plate-cylinder.msh",
             &format!("{}/meshes/{mesh}", env!("CARGO_MANIFEST_DIR")),
         );
-    let path = dir.join("scene.toml");
-    std::fs::write(&path, text).unwrap();
+    let path = crate::scratch::ScratchFile::with_text("step-cost", "scene.toml", &text);
     load(&path).unwrap()
 }
 
