@@ -14,13 +14,10 @@ use anm::linalg::SparseMatrix;
 use anm::linalg::mpi;
 use anm::linalg::mumps::{self, Mumps};
 
-/// A fresh directory `anm-mumps-<what>-XXXXXX`, removed when dropped.
-fn scratch(what: &str) -> tempfile::TempDir {
-    tempfile::Builder::new()
-        .prefix(&format!("anm-mumps-{what}-"))
-        .tempdir()
-        .expect("a temporary directory")
-}
+#[path = "common/scratch.rs"]
+#[allow(dead_code)]
+mod scratch;
+use scratch::scratch;
 
 /// A square matrix as coordinates, duplicates allowed.
 struct Coo {
@@ -192,7 +189,7 @@ fn struct_layout_matches_the_installed_header() {
         ));
     }
     c.push_str("return 0;\n}\n");
-    let tmp = scratch("layout");
+    let tmp = scratch("mumps-layout");
     let dir = tmp.path();
     std::fs::write(dir.join("layout.c"), c).unwrap();
     let cc = Command::new("cc")
@@ -442,7 +439,7 @@ fn two_ranks_hold_the_same_solution() {
         return;
     };
     let exe = std::env::current_exe().unwrap();
-    let tmp = scratch("ranks");
+    let tmp = scratch("mumps-ranks");
     let dir = tmp.path();
     let mut cmd = mpirun_job(&mpirun);
     cmd.env("ANM_MUMPS_RANK_DIR", dir);
@@ -659,7 +656,7 @@ fn anm_run_on_two_ranks_matches_faer() {
         return;
     };
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
-    let tmp = scratch("run");
+    let tmp = scratch("mumps-run");
     let dir = tmp.path();
     let text = std::fs::read_to_string(root.join("scenes/plate-cylinder-coarse.toml"))
         .unwrap()

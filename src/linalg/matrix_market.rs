@@ -154,10 +154,7 @@ mod tests {
             vec![0.0, 0.5, 3.0],
         ]);
         let (s, v) = a.compressed(None).unwrap();
-        let tmp = tempfile::Builder::new()
-            .prefix("anm-mm-")
-            .tempdir()
-            .unwrap();
+        let tmp = tempfile::tempdir().unwrap();
         let dir = tmp.path();
         for symmetric in [true, false] {
             let p = dir.join(format!("a-{symmetric}.mtx"));

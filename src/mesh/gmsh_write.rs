@@ -246,10 +246,7 @@ mod tests {
     #[test]
     fn written_mesh_reads_back() {
         let m = structured::rectangle(0.0, 2.0, -0.1, 0.1, 6, 2);
-        let tmp = tempfile::Builder::new()
-            .prefix("anm-gmsh-write-")
-            .tempdir()
-            .unwrap();
+        let tmp = tempfile::tempdir().unwrap();
         let dir = tmp.path();
         let path = dir.join("strip.msh");
         write(&path, &m, "strip", &[("clamp", &m.groups["s0"])]).unwrap();
@@ -284,10 +281,7 @@ mod tests {
         ring_nodes.sort_unstable();
         ring_nodes.dedup();
         m.groups.insert("ring".into(), ring_nodes);
-        let tmp = tempfile::Builder::new()
-            .prefix("anm-gmsh-write-")
-            .tempdir()
-            .unwrap();
+        let tmp = tempfile::tempdir().unwrap();
         let dir = tmp.path();
         let path = dir.join("annulus.msh");
         write_mesh(&path, &m).unwrap();

@@ -317,10 +317,7 @@ mod tests {
 
     #[test]
     fn draw_writes_the_labels() {
-        let tmp = tempfile::Builder::new()
-            .prefix("anm-plot-")
-            .tempdir()
-            .unwrap();
+        let tmp = tempfile::tempdir().unwrap();
         let path = tmp.path().join("plot.svg");
         let line: Vec<(f64, f64)> = (0..=50)
             .map(|i| (i as f64 / 50.0, 2e-4 * i as f64 / 50.0 + 1e-4))
