@@ -465,6 +465,9 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
                 for note in &sc.mesh.notes {
                     println!("  {note}");
                 }
+                for w in &sc.warnings {
+                    eprintln!("warning: {w}");
+                }
             }
             println!("{}: valid `{}` scene", scene.display(), kind.name());
             Ok(ExitCode::SUCCESS)

@@ -128,6 +128,20 @@ impl StripPath {
     pub fn length(&self) -> f64 {
         self.pieces.iter().map(Piece::length).sum()
     }
+
+    /// Whether a straight piece passes within the circle of `centre` and
+    /// `radius` (an obstacle the path does not wrap, which the strip would
+    /// then start inside of).
+    pub fn crosses(&self, centre: [f64; 2], radius: f64) -> bool {
+        let c = V2::from(centre);
+        self.pieces.iter().any(|p| match *p {
+            Piece::Line { from, to } => {
+                let f = ((c - from).dot(&(to - from)) / (to - from).norm_squared()).clamp(0.0, 1.0);
+                (from + (to - from) * f - c).norm() < radius
+            }
+            Piece::Arc { .. } => false,
+        })
+    }
 }
 
 /// The common tangent of two circles (centre, signed radius): the direction

@@ -13,6 +13,42 @@ pub struct State<'a> {
     pub full: &'a [f64],
     pub lambda: f64,
     pub arclength: f64,
+    /// The full residual that support reactions are read from, where it is
+    /// not the model's at this state (a linear analysis gives the linear
+    /// part of the residual: [`linear_residual`]); None: the model's.
+    pub residual: Option<&'a [f64]>,
+}
+
+/// The residual of a linear analysis along its solution (λ u_1, λ):
+/// R_lin(λ) = R_0 + λ R_1, with R_1 = dR/dλ along the path at λ = 0 on every
+/// dof (fixed ones included), so that its support reactions balance the
+/// loads of the linear model. R_1 is the derivative at 0 of the
+/// interpolating cubic through the model's residual at λ = 0, h, 2h, 3h
+/// (h = λ_end / 3): exact for the shell's internal forces, cubic in the
+/// displacements, and for dead and follower loads (polynomials of degree
+/// ≤ 3 in λ along the path); the contact law (eq. 3) is not a polynomial,
+/// and its forces there are the interpolant's. Returns (R_0, R_1).
+pub fn linear_residual(
+    model: &ShellModel,
+    u1: &[f64],
+    lambda_end: f64,
+) -> Result<(Vec<f64>, Vec<f64>)> {
+    let h = lambda_end / 3.0;
+    let at = |k: f64| -> Result<Vec<f64>> {
+        let l = k * h;
+        let u: Vec<f64> = u1.iter().map(|x| l * x).collect();
+        model.residual_full(&model.expand(&u, l), l)
+    };
+    let (r0, r1, r2, r3) = (at(0.0)?, at(1.0)?, at(2.0)?, at(3.0)?);
+    // Lagrange derivative at 0 of the cubic through 0, h, 2h, 3h.
+    let slope = r0
+        .iter()
+        .zip(&r1)
+        .zip(&r2)
+        .zip(&r3)
+        .map(|(((a, b), c), d)| (-11.0 * a + 18.0 * b - 9.0 * c + 2.0 * d) / (6.0 * h))
+        .collect();
+    Ok((r0, slope))
 }
 
 /// Contact of one pair at a state.
@@ -78,11 +114,11 @@ pub fn evaluate(model: &ShellModel, probes: &[Probe], s: &State) -> Result<Vec<f
     let needs_residual = probes
         .iter()
         .any(|p| matches!(p.quantity, Quantity::Reaction { .. }));
-    let residual = if needs_residual {
+    let residual = match (needs_residual, s.residual) {
+        (true, Some(r)) => r.to_vec(),
         // Support reactions: the residual f_int − f_ext at the fixed dofs.
-        model.residual_full(s.full, s.lambda)?
-    } else {
-        vec![]
+        (true, None) => model.residual_full(s.full, s.lambda)?,
+        (false, _) => vec![],
     };
     let mean = |nodes: &[usize], f: &dyn Fn(usize) -> f64| {
         nodes.iter().map(|&n| f(n)).sum::<f64>() / nodes.len() as f64

@@ -415,6 +415,7 @@ impl<'s> Recorder<'s> {
                 full,
                 lambda,
                 arclength: 0.0,
+                residual: None,
             },
         );
         let v = |a: &[[f64; 3]]| {

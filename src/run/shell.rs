@@ -332,6 +332,7 @@ fn run_inner(
                 full: &full0,
                 lambda: 0.0,
                 arclength: 0.0,
+                residual: None,
             },
         )?;
         rec.vtk(&model, &full0, 0.0, "shell_0000.vtu")?;
@@ -438,6 +439,7 @@ fn run_inner(
                             full: &full,
                             lambda: g,
                             arclength: arc0 + a,
+                            residual: None,
                         },
                     )?;
                 }
@@ -598,6 +600,7 @@ fn run_inner(
                                 full: &full,
                                 lambda: g,
                                 arclength: rec.state.arclength,
+                                residual: None,
                             },
                         )?;
                     }
@@ -634,15 +637,28 @@ fn run_inner(
             let u_end: Vec<f64> = u1.iter().map(|x| x * l_end).collect();
             // Arclength per unit of lambda.
             let scale = chord(&model, &u_end, l_end, l_end.abs()) / l_end.abs();
-            for g in rec.grid_between(0.0, l_end) {
+            // Support reactions of the linear model, not of the shell's
+            // nonlinear residual at the linear solution (which, off
+            // equilibrium, did not balance the loads: 1.0031 N of reaction
+            // for a 1 N tip load on a cantilever rotated 0.03 rad).
+            let (r0, r1) = super::probe::linear_residual(&model, &u1, l_end)?;
+            // The grid, and lambda_end where it is off the grid (recorded
+            // here, with the linear reactions, not as the path's last point).
+            let mut points = rec.grid_between(0.0, l_end);
+            if points.last().is_none_or(|g| (g - l_end).abs() > 1e-12) {
+                points.push(l_end);
+            }
+            for g in points {
                 let u: Vec<f64> = u1.iter().map(|x| x * g).collect();
                 let full = model.expand(&u, g);
+                let residual: Vec<f64> = r0.iter().zip(&r1).map(|(a, b)| a + g * b).collect();
                 rec.record(
                     &model,
                     &State {
                         full: &full,
                         lambda: g,
                         arclength: scale * g.abs(),
+                        residual: Some(&residual),
                     },
                 )?;
             }
@@ -685,6 +701,7 @@ fn run_inner(
                 full: &full_last,
                 lambda: lambda_last,
                 arclength: rec.state.arclength,
+                residual: None,
             },
         )?;
     }

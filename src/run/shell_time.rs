@@ -156,7 +156,33 @@ fn solve_with(scene: &ShellScene, progress: bool) -> Result<(TimeRun, FrictionDa
     if let Some(b) = &bar {
         b.finish_and_clear();
     }
-    Ok((run?, dae))
+    Ok((run.map_err(|e| at_rest(scene, e))?, dae))
+}
+
+/// The run starts at rest (U = 0) and first brings that state to
+/// equilibrium: where this fails with loads already on at t = 0, say so and
+/// name the key that ramps them, rather than a bare "no convergence".
+fn at_rest(scene: &ShellScene, e: Error) -> Error {
+    let fr = scene.friction.as_ref().expect("a friction scene");
+    match e {
+        Error::NoConvergence {
+            step: 0,
+            at,
+            iterations,
+            residual,
+            ..
+        } if at == 0.0 && fr.load.value(0.0) > 0.0 && !scene.loads.is_empty() => Error::Invalid {
+            file: scene.file.clone(),
+            key: "friction.load_ramp".into(),
+            problem: format!(
+                "the loads are full at t = 0 (load_ramp = [{}, {}]; [0, 0] when absent) and the state at rest could not be brought to equilibrium under them (relative residual {residual:.3e} after {iterations} corrections): ramp them from 0, e.g. load_ramp = [0, {}]",
+                fr.load.start,
+                fr.load.end,
+                fr.t_end / 10.0
+            ),
+        },
+        other => other,
+    }
 }
 
 /// Columns of history.csv after t and lambda: the probes, then the
@@ -166,6 +192,7 @@ fn row(dae: &FrictionDae, scene: &ShellScene, areas: &[f64], s: &TimeSample) -> 
         full: &s.full,
         lambda: s.lambda,
         arclength: f64::NAN,
+        residual: None,
     };
     let mut v = vec![s.t, s.lambda];
     v.extend(probe::evaluate(&dae.model, &scene.probes, &state)?);

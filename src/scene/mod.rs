@@ -3,6 +3,7 @@
 //! Every scene starts with `[scene] kind = "..."`; the kind selects the typed
 //! schema. Errors name the file, the key (`table.key`) and the problem.
 
+mod exact;
 pub mod friction;
 pub mod shell;
 

@@ -59,15 +59,23 @@ struct RawMesh {
     file: Option<String>,
     #[serde(rename = "type")]
     kind: Option<String>,
+    #[serde(default, deserialize_with = "super::exact::option")]
     x: Option<[f64; 2]>,
+    #[serde(default, deserialize_with = "super::exact::option")]
     y: Option<[f64; 2]>,
     radius: Option<toml::Value>,
+    #[serde(default, deserialize_with = "super::exact::option")]
     angle: Option<[f64; 2]>,
+    #[serde(default, deserialize_with = "super::exact::option")]
     longitude: Option<[f64; 2]>,
+    #[serde(default, deserialize_with = "super::exact::option")]
     latitude: Option<[f64; 2]>,
+    #[serde(default, deserialize_with = "super::exact::option")]
     divisions: Option<[usize; 2]>,
     node_tolerance: Option<f64>,
+    #[serde(default, deserialize_with = "super::exact::option")]
     start: Option<[f64; 2]>,
+    #[serde(default, deserialize_with = "super::exact::option")]
     end: Option<[f64; 2]>,
     rollers: Option<Vec<String>>,
     turn: Option<Vec<String>>,
@@ -83,6 +91,7 @@ struct RawGroup {
     name: String,
     /// [[xmin, ymin, zmin], [xmax, ymax, zmax]]
     #[serde(rename = "box")]
+    #[serde(deserialize_with = "super::exact::nested")]
     bounds: [[f64; 3]; 2],
 }
 
@@ -103,6 +112,7 @@ struct RawShell {
 #[serde(deny_unknown_fields)]
 struct RawFix {
     group: Option<String>,
+    #[serde(default, deserialize_with = "super::exact::option")]
     point: Option<[f64; 3]>,
     dofs: Option<Vec<String>>,
     /// Per unit lambda, one per entry of `dofs`.
@@ -115,16 +125,22 @@ struct RawFix {
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct RawLoad {
+    #[serde(default, deserialize_with = "super::exact::option")]
     point: Option<[f64; 3]>,
     group: Option<String>,
     edge: Option<String>,
     surface: Option<String>,
+    #[serde(default, deserialize_with = "super::exact::option")]
     force: Option<[f64; 3]>,
+    #[serde(default, deserialize_with = "super::exact::option")]
     moment: Option<[f64; 3]>,
+    #[serde(default, deserialize_with = "super::exact::option")]
     line_force: Option<[f64; 3]>,
+    #[serde(default, deserialize_with = "super::exact::option")]
     traction: Option<[f64; 3]>,
     pressure: Option<f64>,
     follower: Option<bool>,
+    #[serde(default, deserialize_with = "super::exact::option")]
     ramp: Option<[f64; 2]>,
 }
 
@@ -134,12 +150,16 @@ struct RawObstacle {
     name: Option<String>,
     #[serde(rename = "type")]
     kind: String,
+    #[serde(default, deserialize_with = "super::exact::option")]
     centre: Option<[f64; 3]>,
+    #[serde(default, deserialize_with = "super::exact::option")]
     axis: Option<[f64; 3]>,
     radius: Option<f64>,
     crown: Option<f64>,
     face: Option<f64>,
+    #[serde(default, deserialize_with = "super::exact::option")]
     point: Option<[f64; 3]>,
+    #[serde(default, deserialize_with = "super::exact::option")]
     normal: Option<[f64; 3]>,
     motion: Option<RawMotion>,
 }
@@ -149,6 +169,7 @@ struct RawObstacle {
 struct RawMotion {
     #[serde(rename = "type")]
     kind: String,
+    #[serde(default, deserialize_with = "super::exact::option")]
     velocity: Option<[f64; 3]>,
     omega: Option<f64>,
 }
@@ -174,7 +195,9 @@ struct RawFriction {
     omega: f64,
     zeta: Option<f64>,
     t_end: f64,
+    #[serde(default, deserialize_with = "super::exact::option")]
     load_ramp: Option<[f64; 2]>,
+    #[serde(default, deserialize_with = "super::exact::option")]
     motion_ramp: Option<[f64; 2]>,
     output_step: Option<f64>,
     stability: Option<bool>,
@@ -185,6 +208,7 @@ struct RawFriction {
 struct RawProbe {
     name: String,
     quantity: String,
+    #[serde(default, deserialize_with = "super::exact::option")]
     point: Option<[f64; 3]>,
     group: Option<String>,
     obstacle: Option<String>,
@@ -639,13 +663,26 @@ pub fn load(path: &Path) -> Result<ShellScene> {
             None
         }
     };
-    let warnings = if friction.is_none() {
+    let mut warnings = if friction.is_none() {
         motion_warnings(path, &obstacles)
     } else {
         vec![]
     };
+    if contact.is_none() && !obstacles.is_empty() {
+        warnings.push(format!(
+            "{}: {} [[obstacle]] but no [contact]: nothing touches them (a strip's `mesh.rollers` only shape its path); give [contact] a node group to make them act",
+            path.display(),
+            obstacles.len()
+        ));
+    }
     let probes = probes(&ctx, &raw.probe, &fixed, &obstacles, contact.is_some())?;
     let (method, solver, length_scale) = solver(&c, &raw.solver, size)?;
+    if friction.is_some() && !matches!(method, Method::Anm) {
+        return Err(c.fail(
+            "solver.method",
+            "a scene with [friction] is solved in time by the series (solver.time_step); `newton` and `linear` do not apply: remove solver.method",
+        ));
+    }
     let piecewise = contact.as_ref().is_some_and(|ct| ct.eta == 0.0);
     if piecewise && friction.is_some() {
         return Err(c.fail(
@@ -734,6 +771,17 @@ fn mesh(c: &Checker, path: &Path, m: &RawMesh, obstacles: &[ObstacleSpec]) -> Re
         }
         if v[0] == v[1] {
             return Err(c.fail(key, format!("the range [{}, {}] is empty", v[0], v[1])));
+        }
+        // The built-in meshes do not close a seam: at 360 degrees its two
+        // rows of nodes would lie on each other unjoined (an open tube).
+        if (v[1] - v[0]).abs() >= 360.0 {
+            return Err(c.fail(
+                key,
+                format!(
+                    "the range [{}, {}] spans 360 degrees or more: a built-in mesh does not close its seam (the two edges would be separate rows of coincident nodes); model a part with `fix.symmetry`, or give a closed mesh in `mesh.file`",
+                    v[0], v[1]
+                ),
+            ));
         }
         Ok((v[0].to_radians(), v[1].to_radians()))
     };
@@ -929,6 +977,14 @@ fn strip(c: &Checker, m: &RawMesh, obstacles: &[ObstacleSpec]) -> Result<Mesh> {
     };
     let start = need("mesh.start", m.start)?;
     let end = need("mesh.end", m.end)?;
+    if start == end {
+        return Err(c.fail(
+            "mesh.end",
+            format!(
+                "{end:?} is mesh.start: a strip mesh does not close a loop (its first and last edges would lie on each other unjoined)"
+            ),
+        ));
+    }
     let width = need("mesh.x", m.x)?;
     if !(width[1] > width[0]) {
         return Err(c.fail("mesh.x", format!("needs min < max, got {width:?}")));
@@ -1032,6 +1088,28 @@ fn strip(c: &Checker, m: &RawMesh, obstacles: &[ObstacleSpec]) -> Result<Mesh> {
     })?;
     let p =
         strip_path::path(start, end, &rollers, offset).map_err(|e| c.fail("mesh.rollers", e))?;
+    // The cylinders along x that the path does not wrap must stay clear of
+    // it too: the strip would start inside them.
+    for (i, o) in obstacles.iter().enumerate() {
+        if let Obstacle::Cylinder {
+            centre,
+            axis,
+            radius,
+            ..
+        } = o.shape
+            && axis.x.abs() >= 1.0 - 1e-12
+            && !names.contains(&o.name)
+            && p.crosses([centre.y, centre.z], radius)
+        {
+            return Err(c.fail(
+                "mesh.rollers",
+                format!(
+                    "the strip's path passes through obstacle[{i}] `{}`, which it does not wrap: add it to mesh.rollers (with its turn) or move it",
+                    o.name
+                ),
+            ));
+        }
+    }
     let along = p.length() / h.min(arc_h);
     if across == 0 || along * across as f64 > 1e6 {
         return Err(c.fail(

@@ -225,3 +225,32 @@ fn conveying_strip_runs_at_small_zeta_and_omega() {
 fn conveying_strip_runs_at_omega_1e_5() {
     runs_with_roller_two_in_full_slip(&coarse_conveying_at(1e-2, 1e-5));
 }
+
+/// Loads full at t = 0 on a shell that starts at rest: when the state at
+/// rest cannot be brought to equilibrium under them, the error names
+/// `friction.load_ramp` (it was a bare "step 0, t = 0: no convergence").
+#[test]
+fn loads_full_at_rest_name_the_load_ramp() {
+    let text = std::fs::read_to_string("scenes/strip-conveying.toml")
+        .expect("scene")
+        .replace("element_length = 0.05", "element_length = 0.1")
+        .replace("arc_element_length = 0.01", "arc_element_length = 0.03")
+        .replace("divisions_across = 8", "divisions_across = 2")
+        .replace("load_ramp = [0.0, 0.2]\n", "");
+    let path = crate::scratch::ScratchFile::with_text("conveying", "at-rest.toml", &text);
+    let sc = load(&path).expect("scene loads");
+    let e = match shell_time::solve(&sc) {
+        Ok(_) => panic!("expected the start at rest to fail"),
+        Err(e) => e,
+    };
+    let msg = e.to_string();
+    println!("{msg}");
+    assert_eq!(e.kind(), "invalid_input", "{msg}");
+    for part in [
+        "at-rest.toml",
+        "friction.load_ramp",
+        "load_ramp = [0, 0.15]",
+    ] {
+        assert!(msg.contains(part), "`{msg}` lacks `{part}`");
+    }
+}

@@ -2,6 +2,7 @@
 //! One test binary per area (DESIGN §1): the files below are its modules.
 
 mod bad_input;
+mod built_in_mesh_input;
 mod docs;
 mod edited;
 mod fuzz;

@@ -249,3 +249,46 @@ fn a_crowned_roll_is_read_and_bad_crowns_name_the_key() {
         expect_invalid(&p, key, part);
     }
 }
+
+/// Input a new user's scenes got through (this session's review): a path
+/// that ends where it starts, a path through a cylinder it does not wrap,
+/// and a static method with [friction].
+#[test]
+fn loops_unwrapped_cylinders_and_static_methods_are_refused() {
+    let base = format!("{}/{BASE}", env!("CARGO_MANIFEST_DIR"));
+    let f = edited(
+        &base,
+        "strip-review",
+        "loop.toml",
+        &[(
+            "end = [2.6856406460551017, 0.8856406560551019]",
+            "end = [-0.5, 0.30000001]",
+        )],
+    );
+    expect_invalid(&f, "mesh.end", "does not close a loop");
+    // r3 dropped from the rollers: the path's last straight piece, from r2
+    // to the end point, ran through it (the strip started inside it).
+    let f = edited(
+        &base,
+        "strip-review",
+        "through.toml",
+        &[
+            (
+                "rollers = [\"r1\", \"r2\", \"r3\"]",
+                "rollers = [\"r1\", \"r2\"]",
+            ),
+            (
+                "turn = [\"cw\", \"ccw\", \"cw\"]",
+                "turn = [\"cw\", \"ccw\"]",
+            ),
+        ],
+    );
+    expect_invalid(&f, "mesh.rollers", "passes through obstacle[2] `r3`");
+    let f = edited(
+        &base,
+        "strip-review",
+        "newton.toml",
+        &[("eps = 1e-6\n", "method = \"newton\"\n")],
+    );
+    expect_invalid(&f, "solver.method", "[friction]");
+}

@@ -10,6 +10,7 @@ mod shell_common;
 mod bifurcation;
 mod derivatives_fd;
 mod linear_macneal_harder;
+mod linear_reactions;
 mod membrane_stress;
 mod nonlinear_cantilevers;
 mod patch_macneal_harder;
