@@ -805,6 +805,9 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
                         for w in &sc.warnings {
                             eprintln!("warning: {w}");
                         }
+                        // Ctrl-C / SIGTERM end the run at the next step end
+                        // with its outputs (no resume in time yet).
+                        anm::run::interrupt::install();
                         let r = anm::run::shell_time::run_with(&sc, Some(&out), !quiet)
                             .with_context(|| format!("running {}", scene.display()))?;
                         println!(
@@ -839,7 +842,11 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
                                 e.mode.as_deref().unwrap_or("")
                             );
                         }
-                        return Ok(ExitCode::SUCCESS);
+                        return Ok(if r.stop == "interrupted" {
+                            ExitCode::from(130)
+                        } else {
+                            ExitCode::SUCCESS
+                        });
                     }
                     // Ctrl-C / SIGTERM end a shell run at the next step end.
                     anm::run::interrupt::install();

@@ -382,6 +382,7 @@ pub fn run_with(scene: &ShellScene, out_dir: Option<&Path>, progress: bool) -> R
     let (stop, stop_t, stop_node) = match run.stop {
         TimeStop::End => ("end", last.t, None),
         TimeStop::Singularity { t, node } => ("singularity", t, Some(node + 1)),
+        TimeStop::Interrupted { t } => ("interrupted", t, None),
     };
     let mut report = TimeReport {
         scene: scene.file.display().to_string(),

@@ -95,6 +95,9 @@ pub enum TimeStop {
         t: f64,
         node: usize,
     },
+    /// Ctrl-C or SIGTERM (run::interrupt): stopped at the step end at t,
+    /// every output time before it written.
+    Interrupted { t: f64 },
 }
 
 /// Counters of a run.
@@ -210,6 +213,10 @@ pub fn run_from(
         stats.steps += 1;
         progress(s.t, stats.steps);
         if !matches!(stop, TimeStop::End) {
+            break;
+        }
+        if crate::run::interrupt::requested() {
+            stop = TimeStop::Interrupted { t: s.t };
             break;
         }
     }
@@ -430,6 +437,11 @@ fn run_implicit(
         let at_output =
             next_out < cfg.outputs.len() && s.t >= cfg.outputs[next_out] * (1.0 - 1e-14);
         let done = s.t >= cfg.t_end * (1.0 - 1e-14);
+        // At a step end, its output written: Ctrl-C or SIGTERM stop here.
+        if !done && !at_output && crate::run::interrupt::requested() {
+            stop = TimeStop::Interrupted { t: s.t };
+            break;
+        }
         if !done && stats.steps >= cfg.max_steps {
             return Err(Error::TimeSteps {
                 param: "t",

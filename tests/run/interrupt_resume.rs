@@ -136,3 +136,42 @@ fn resume_refuses_a_changed_scene_and_a_missing_checkpoint() {
     assert_eq!(o.status.code(), Some(1));
     assert!(err.contains("checkpoint.json") && !err.contains("panicked"));
 }
+
+/// A shell run in time (`[friction]`) also stops at a step end on SIGTERM,
+/// with its outputs up to there and exit code 130 (it was killed with no
+/// output at all). It cannot be resumed yet.
+#[test]
+fn sigterm_stops_a_shell_run_in_time_with_its_outputs() {
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/strip-conveying.toml");
+    let out = tmp("in-time");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_anm"))
+        .args(["run", "--quiet"])
+        .arg(&scene)
+        .arg("-o")
+        .arg(&out)
+        .stdout(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    // The whole run takes about a minute; its first steps start within a
+    // second (set-up, the state at rest).
+    std::thread::sleep(Duration::from_secs(3));
+    assert!(
+        child.try_wait().unwrap().is_none(),
+        "the run ended before it could be interrupted"
+    );
+    Command::new("kill")
+        .args(["-TERM", &child.id().to_string()])
+        .status()
+        .unwrap();
+    let start = Instant::now();
+    let code = child.wait().unwrap().code();
+    println!("stopped {:.2} s after SIGTERM", start.elapsed().as_secs_f64());
+    assert_eq!(code, Some(130), "exit code of an interrupted run");
+    let s = summary(&out);
+    assert_eq!(s["stop"], "interrupted");
+    let t = s["stop_t"].as_f64().unwrap();
+    assert!(t > 0.0 && t < 1.5, "stop_t = {t}");
+    let history = rows(&out.join("history.csv"));
+    assert!(!history.is_empty());
+    assert!(history.iter().all(|r| r[0] <= t && r.iter().all(|x| x.is_finite())));
+}
