@@ -809,7 +809,7 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
                         // with its outputs (no resume in time yet).
                         anm::run::interrupt::install();
                         let r = anm::run::shell_time::run_with(&sc, Some(&out), !quiet)
-                            .with_context(|| format!("running {}", scene.display()))?;
+                            .map_err(|e| running(e, &scene))?;
                         println!(
                             "{}: stop = {} at t = {:.6} s; {} steps ({} implicit, {} of them fully implicit; time_step = {}), {} factorizations, {} corrections, {:.3} s; {} friction nodes; outputs in {}",
                             scene.display(),
@@ -857,11 +857,11 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
                     if !anm::linalg::mpi::is_root() {
                         let sc = anm::scene::shell::load(&scene)?;
                         anm::run::shell::run_loaded(&sc, None, false)
-                            .with_context(|| format!("running {}", scene.display()))?;
+                            .map_err(|e| running(e, &scene))?;
                         return Ok(ExitCode::SUCCESS);
                     }
                     let report = anm::run::run_scene(&scene, &out, !quiet)
-                        .with_context(|| format!("running {}", scene.display()))?;
+                        .map_err(|e| running(e, &scene))?;
                     Ok(shell_summary(&report, &out))
                 }
                 _ => {
@@ -870,7 +870,7 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
                     // with history.csv and steps.csv holding every step.
                     anm::run::interrupt::install();
                     let run = anm::model::friction_run::run(&sc, Some(&out), !quiet)
-                        .with_context(|| format!("running {}", scene.display()))?;
+                        .map_err(|e| running(e, &scene))?;
                     println!(
                         "{}: stop = {} at t = {:.6} s; {} steps, {} factorizations, {} solves, {:.3} s; outputs in {}",
                         scene.display(),
@@ -1097,5 +1097,18 @@ fn shell_summary(report: &anm::run::RunReport, out: &std::path::Path) -> ExitCod
         "end" => ExitCode::SUCCESS,
         "interrupted" => ExitCode::from(130),
         _ => ExitCode::from(2),
+    }
+}
+
+/// A run's error, with "running SCENE" in front unless it already names
+/// the scene file (a bad key of the scene: "error: running f.toml: f.toml:
+/// key ..." said the file twice).
+fn running(e: anm::Error, scene: &std::path::Path) -> anyhow::Error {
+    let names_it = e.to_string().starts_with(&scene.display().to_string());
+    let e = anyhow::Error::new(e);
+    if names_it {
+        e
+    } else {
+        e.context(format!("running {}", scene.display()))
     }
 }

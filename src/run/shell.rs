@@ -164,10 +164,35 @@ pub fn run_scene(scene_path: &Path, out_dir: &Path, progress: bool) -> Result<Ru
 /// Continues the interrupted run in `out_dir` from its checkpoint.json.
 pub fn resume(out_dir: &Path, progress: bool) -> Result<RunReport> {
     let file = out_dir.join("checkpoint.json");
-    let text = std::fs::read_to_string(&file).map_err(|source| Error::Io {
-        file: file.clone(),
-        source,
-    })?;
+    // A run that reached its end removed its checkpoint: say so, rather
+    // than that the file cannot be read.
+    let finished = || -> Option<String> {
+        let text = std::fs::read_to_string(out_dir.join("summary.json")).ok()?;
+        let v: serde_json::Value = serde_json::from_str(&text).ok()?;
+        let stop = &v["stop"];
+        (stop["reason"].as_str()? != "interrupted").then(|| {
+            format!(
+                "the run there has already ended (stop: {} at lambda = {}): nothing to resume",
+                stop["reason"].as_str().unwrap_or("?"),
+                stop["lambda"]
+            )
+        })
+    };
+    let text = match std::fs::read_to_string(&file) {
+        Ok(t) => t,
+        Err(source) => {
+            return Err(match finished() {
+                Some(problem) => Error::Resume {
+                    file: out_dir.to_path_buf(),
+                    problem,
+                },
+                None => Error::Io {
+                    file: file.clone(),
+                    source,
+                },
+            });
+        }
+    };
     let cp: RunCheckpoint = serde_json::from_str(&text).map_err(|e| Error::Parse {
         file: file.clone(),
         message: e.to_string(),
@@ -455,7 +480,13 @@ fn run_inner(
                     )?);
                 }
                 if let Some(g) = step.geometric {
-                    events.push(bifurcation::geometric(&step, g.distance));
+                    // A singular point estimated past lambda_end lies where
+                    // the run does not go (an Euler column ending at 1.2
+                    // reported one at 102 before its bifurcation at 1.03).
+                    let e = bifurcation::geometric(&step, g.distance);
+                    if (e.lambda - cfg.lambda_end) * cfg.lambda_end.signum() <= 0.0 {
+                        events.push(e);
+                    }
                 }
                 if secondary.is_some() && rec.state.switched_at.is_none() {
                     // Found above.

@@ -424,7 +424,8 @@ pub fn run_with(scene: &ShellScene, out_dir: Option<&Path>, progress: bool) -> R
         w.write_record(&head)
             .map_err(|e| write_err(&file)(e.to_string()))?;
         for r in &rows {
-            w.write_record(r.iter().map(|v| format!("{v:.12e}")))
+            // + 0.0: a negative zero (an empty slip area) prints as 0.
+            w.write_record(r.iter().map(|v| format!("{:.12e}", v + 0.0)))
                 .map_err(|e| write_err(&file)(e.to_string()))?;
         }
         w.flush().map_err(|e| write_err(&file)(e.to_string()))?;
@@ -459,7 +460,7 @@ pub fn run_with(scene: &ShellScene, out_dir: Option<&Path>, progress: bool) -> R
                     f.gap, f.rn, f.force[0], f.force[1], f.force[2], f.slip[0], f.slip[1],
                     f.slip[2], speed,
                 ]
-                .map(|v| format!("{v:.12e}")),
+                .map(|v| format!("{:.12e}", v + 0.0)),
             );
             rec.push(state.into());
             w.write_record(&rec)

@@ -97,7 +97,9 @@ pub enum TimeStop {
     },
     /// Ctrl-C or SIGTERM (run::interrupt): stopped at the step end at t,
     /// every output time before it written.
-    Interrupted { t: f64 },
+    Interrupted {
+        t: f64,
+    },
 }
 
 /// Counters of a run.

@@ -165,7 +165,10 @@ fn sigterm_stops_a_shell_run_in_time_with_its_outputs() {
         .unwrap();
     let start = Instant::now();
     let code = child.wait().unwrap().code();
-    println!("stopped {:.2} s after SIGTERM", start.elapsed().as_secs_f64());
+    println!(
+        "stopped {:.2} s after SIGTERM",
+        start.elapsed().as_secs_f64()
+    );
     assert_eq!(code, Some(130), "exit code of an interrupted run");
     let s = summary(&out);
     assert_eq!(s["stop"], "interrupted");
@@ -173,5 +176,9 @@ fn sigterm_stops_a_shell_run_in_time_with_its_outputs() {
     assert!(t > 0.0 && t < 1.5, "stop_t = {t}");
     let history = rows(&out.join("history.csv"));
     assert!(!history.is_empty());
-    assert!(history.iter().all(|r| r[0] <= t && r.iter().all(|x| x.is_finite())));
+    assert!(
+        history
+            .iter()
+            .all(|r| r[0] <= t && r.iter().all(|x| x.is_finite()))
+    );
 }
