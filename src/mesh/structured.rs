@@ -98,6 +98,45 @@ pub fn grid(label: &str, nx: usize, ny: usize, f: impl Fn(usize, usize) -> (Vec3
     }
 }
 
+/// `m` (from [`grid`]) closed along t: its last node row (t = 1) is
+/// dropped and the elements that used it take the first row (t = 0), which
+/// the map put at the same place (a full turn). The t0 and t1 groups are
+/// then both the seam row; the mesh has no [`super::Grid`] (its rows no
+/// longer follow the layout's numbering at the seam).
+pub fn close_t(mut m: Mesh) -> Mesh {
+    let g = m.grid.expect("a structured mesh");
+    let (nx, ny) = (g.nx, g.ny);
+    let last = ny * (nx + 1);
+    let seam = |n: usize| if n >= last { n - last } else { n };
+    for q in &mut m.quads {
+        for n in q.iter_mut() {
+            *n = seam(*n);
+        }
+    }
+    m.nodes.truncate(last);
+    if let Some(normals) = &mut m.exact_normals {
+        normals.truncate(last);
+    }
+    for nodes in m.groups.values_mut() {
+        for n in nodes.iter_mut() {
+            *n = seam(*n);
+        }
+        nodes.sort_unstable();
+        nodes.dedup();
+    }
+    for edges in m.edge_groups.values_mut() {
+        for e in edges.iter_mut() {
+            *e = e.map(seam);
+        }
+    }
+    m.grid = None;
+    m.notes.push(format!(
+        "closed along t: {} nodes on the seam joined",
+        nx + 1
+    ));
+    m
+}
+
 /// Flat rectangle [x0, x1] × [y0, y1] in the plane z = 0, normal +z.
 pub fn rectangle(x0: f64, x1: f64, y0: f64, y1: f64, nx: usize, ny: usize) -> Mesh {
     map("rectangle", nx, ny, |s, t| {

@@ -8,6 +8,7 @@ mod scratch;
 mod shell_common;
 
 mod bifurcation;
+mod closed_tube;
 mod derivatives_fd;
 mod linear_macneal_harder;
 mod linear_reactions;
