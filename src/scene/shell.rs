@@ -1788,7 +1788,7 @@ fn probes(
         } else if q == "tension" {
             let nodes = ctx.nodes(p.point, &p.group, &key)?;
             let grid = ctx.mesh.grid.ok_or_else(|| {
-                c.fail(&key, "`tension` needs a built-in mesh (mesh.type): its cross-sections are its node rows of constant t")
+                c.fail(&key, "`tension` needs a built-in mesh (mesh.type) that is not closed over a full turn: its cross-sections are its node rows of constant t")
             })?;
             let row = grid.row_of(&nodes).ok_or_else(|| {
                 c.fail(&key, "`tension` needs a group that is one node row of constant t (t0, t1, a strip's <roller>_in or <roller>_out, or a [[group]] box around one row)")
