@@ -672,7 +672,15 @@ fn run_inner(
             // nonlinear residual at the linear solution (which, off
             // equilibrium, did not balance the loads: 1.0031 N of reaction
             // for a 1 N tip load on a cantilever rotated 0.03 rad).
-            let (r0, r1) = super::probe::linear_residual(&model, &u1, l_end)?;
+            // (Only where a probe reads reactions.)
+            let reactions = scene
+                .probes
+                .iter()
+                .any(|p| matches!(p.quantity, crate::scene::shell::Quantity::Reaction { .. }));
+            let linear = match reactions {
+                true => Some(super::probe::linear_residual(&model, &u1, l_end)?),
+                false => None,
+            };
             // The grid, and lambda_end where it is off the grid (recorded
             // here, with the linear reactions, not as the path's last point).
             let mut points = rec.grid_between(0.0, l_end);
@@ -682,14 +690,16 @@ fn run_inner(
             for g in points {
                 let u: Vec<f64> = u1.iter().map(|x| x * g).collect();
                 let full = model.expand(&u, g);
-                let residual: Vec<f64> = r0.iter().zip(&r1).map(|(a, b)| a + g * b).collect();
+                let residual: Option<Vec<f64>> = linear
+                    .as_ref()
+                    .map(|(r0, r1)| r0.iter().zip(r1).map(|(a, b)| a + g * b).collect());
                 rec.record(
                     &model,
                     &State {
                         full: &full,
                         lambda: g,
                         arclength: scale * g.abs(),
-                        residual: Some(&residual),
+                        residual: residual.as_deref(),
                     },
                 )?;
             }
