@@ -135,10 +135,7 @@ impl StripPath {
     pub fn crosses(&self, centre: [f64; 2], radius: f64) -> bool {
         let c = V2::from(centre);
         self.pieces.iter().any(|p| match *p {
-            Piece::Line { from, to } => {
-                let f = ((c - from).dot(&(to - from)) / (to - from).norm_squared()).clamp(0.0, 1.0);
-                (from + (to - from) * f - c).norm() < radius
-            }
+            Piece::Line { from, to } => distance_to_segment(c, from, to) < radius,
             Piece::Arc { .. } => false,
         })
     }
@@ -159,6 +156,12 @@ fn tangent(ca: V2, ra: f64, cb: V2, rb: f64) -> Option<(V2, V2, V2)> {
     let dh = delta / l;
     let d = dh * (1.0 - a * a).sqrt() - rot90(dh) * a;
     Some((d, ca - rot90(d) * ra, cb - rot90(d) * rb))
+}
+
+/// Distance from the point c to the segment [from, to].
+fn distance_to_segment(c: V2, from: V2, to: V2) -> f64 {
+    let f = ((c - from).dot(&(to - from)) / (to - from).norm_squared()).clamp(0.0, 1.0);
+    (from + (to - from) * f - c).norm()
 }
 
 /// The path from `start` over the rollers to `end`, with the strip at
@@ -223,9 +226,7 @@ pub fn path(
             if m + 1 == k || m == k {
                 continue;
             }
-            let c = V2::from(r.centre);
-            let f = ((c - from).dot(&(to - from)) / (to - from).norm_squared()).clamp(0.0, 1.0);
-            let gap = (from + (to - from) * f - c).norm() - r.radius;
+            let gap = distance_to_segment(V2::from(r.centre), from, to) - r.radius;
             if gap < offset {
                 return Err(format!(
                     "the straight strip from {} to {} passes through roller `{}`",

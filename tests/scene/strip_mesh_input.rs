@@ -253,42 +253,48 @@ fn a_crowned_roll_is_read_and_bad_crowns_name_the_key() {
 /// Input a new user's scenes got through (this session's review): a path
 /// that ends where it starts, a path through a cylinder it does not wrap,
 /// and a static method with [friction].
+/// A file name, its edits (old, new), the key and a part of the message.
+type Case<'a> = (&'a str, &'a [(&'a str, &'a str)], &'a str, &'a str);
+
 #[test]
 fn loops_unwrapped_cylinders_and_static_methods_are_refused() {
     let base = format!("{}/{BASE}", env!("CARGO_MANIFEST_DIR"));
-    let f = edited(
-        &base,
-        "strip-review",
-        "loop.toml",
-        &[(
-            "end = [2.6856406460551017, 0.8856406560551019]",
-            "end = [-0.5, 0.30000001]",
-        )],
-    );
-    expect_invalid(&f, "mesh.end", "does not close a loop");
-    // r3 dropped from the rollers: the path's last straight piece, from r2
-    // to the end point, ran through it (the strip started inside it).
-    let f = edited(
-        &base,
-        "strip-review",
-        "through.toml",
-        &[
-            (
-                "rollers = [\"r1\", \"r2\", \"r3\"]",
-                "rollers = [\"r1\", \"r2\"]",
-            ),
-            (
-                "turn = [\"cw\", \"ccw\", \"cw\"]",
-                "turn = [\"cw\", \"ccw\"]",
-            ),
-        ],
-    );
-    expect_invalid(&f, "mesh.rollers", "passes through obstacle[2] `r3`");
-    let f = edited(
-        &base,
-        "strip-review",
-        "newton.toml",
-        &[("eps = 1e-6\n", "method = \"newton\"\n")],
-    );
-    expect_invalid(&f, "solver.method", "[friction]");
+    let cases: [Case; 3] = [
+        (
+            "loop.toml",
+            &[(
+                "end = [2.6856406460551017, 0.8856406560551019]",
+                "end = [-0.5, 0.30000001]",
+            )],
+            "mesh.end",
+            "does not close a loop",
+        ),
+        // r3 dropped from the rollers: the path's last straight piece, from
+        // r2 to the end point, ran through it (the strip started inside it).
+        (
+            "through.toml",
+            &[
+                (
+                    "rollers = [\"r1\", \"r2\", \"r3\"]",
+                    "rollers = [\"r1\", \"r2\"]",
+                ),
+                (
+                    "turn = [\"cw\", \"ccw\", \"cw\"]",
+                    "turn = [\"cw\", \"ccw\"]",
+                ),
+            ],
+            "mesh.rollers",
+            "passes through obstacle[2] `r3`",
+        ),
+        (
+            "newton.toml",
+            &[("eps = 1e-6\n", "method = \"newton\"\n")],
+            "solver.method",
+            "[friction]",
+        ),
+    ];
+    for (name, edits, key, part) in cases {
+        let f = edited(&base, "strip-review", name, edits);
+        expect_invalid(&f, key, part);
+    }
 }
