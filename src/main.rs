@@ -805,6 +805,7 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
                         for w in &sc.warnings {
                             eprintln!("warning: {w}");
                         }
+                        fresh_output(&out)?;
                         // Ctrl-C / SIGTERM end the run at the next step end
                         // with its outputs (no resume in time yet).
                         anm::run::interrupt::install();
@@ -855,12 +856,15 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
                     // 0 writes files and prints.
                     #[cfg(feature = "mumps")]
                     if !anm::linalg::mpi::is_root() {
-                        let sc = anm::scene::shell::load(&scene)?;
                         anm::run::shell::run_loaded(&sc, None, false)
                             .map_err(|e| running(e, &scene))?;
                         return Ok(ExitCode::SUCCESS);
                     }
-                    let report = anm::run::run_scene(&scene, &out, !quiet)
+                    for w in &sc.warnings {
+                        eprintln!("warning: {w}");
+                    }
+                    fresh_output(&out)?;
+                    let report = anm::run::shell::run_loaded(&sc, Some(&out), !quiet)
                         .map_err(|e| running(e, &scene))?;
                     Ok(shell_summary(&report, &out))
                 }
@@ -869,6 +873,7 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
                     // Ctrl-C / SIGTERM end the run at the next step end,
                     // with history.csv and steps.csv holding every step.
                     anm::run::interrupt::install();
+                    fresh_output(&out)?;
                     let run = anm::model::friction_run::run(&sc, Some(&out), !quiet)
                         .map_err(|e| running(e, &scene))?;
                     println!(
@@ -1066,6 +1071,20 @@ fn load(
         Kind::Shell => Ok((kind, None)),
         _ => Ok((kind, Some(scene::friction::load(path, &text, kind)?))),
     }
+}
+
+/// Removes an earlier run's files from the output directory of a new run
+/// (output::earlier_run), saying how many.
+fn fresh_output(out: &std::path::Path) -> anyhow::Result<()> {
+    let removed = anm::output::earlier_run::clear(out)?;
+    if !removed.is_empty() {
+        eprintln!(
+            "note: removed {} files of an earlier run from {} (summary.json, snapshots, modes, checkpoint; other files are kept)",
+            removed.len(),
+            out.display()
+        );
+    }
+    Ok(())
 }
 
 /// Prints a shell run's summary line; exit code 0 at the end of the path, 2

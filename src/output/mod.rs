@@ -1,5 +1,6 @@
 //! Run outputs: CSV curves, summary.json, SVG plots.
 
+pub mod earlier_run;
 #[cfg(feature = "hdf5")]
 pub mod hdf5;
 pub mod mode;

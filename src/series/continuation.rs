@@ -51,6 +51,15 @@ pub trait ContinuationProblem {
     fn rhs_prepass(&mut self, _p: usize) -> Option<Prepass<'_>> {
         None
     }
+    /// The magnitude m_i that the state behind unknown i is held to in
+    /// floating point (e.g. the distance of a node from the origin for a
+    /// translation, 1 for a director increment), or None (the default): a
+    /// Newton update with |du_i| <= 16 ε m_i for every i cannot change the
+    /// state, and the corrector stops at that round-off floor when the
+    /// residual no longer falls ([`super::correct`]).
+    fn resolution(&self, _u: &[f64], _lambda: f64) -> Option<Vec<f64>> {
+        None
+    }
     /// Characteristic magnitude s_i of each unknown (default: all 1.0): e.g.
     /// a length of the model for displacements, 1 for rotations or director
     /// increments. The engine measures step lengths, series norms, Padé

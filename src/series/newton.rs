@@ -128,10 +128,13 @@ pub fn run<P: ContinuationProblem>(
         u_end: u,
         lambda_end: l,
     };
-    for index in 0..cfg.max_steps {
+    // Attempts, accepted or halved; errors name the step by the accepted
+    // steps before it (as the ANM path and summary.json's `steps` count).
+    for _attempt in 0..cfg.max_steps {
         if pending.is_empty() {
             return done(stats, Stop::End { lambda }, u, lambda);
         }
+        let index = stats.steps;
         // Predictor direction: previous secant, or the tangent at the start.
         let (du, dl) = match &dir {
             Some(d) => d.clone(),

@@ -26,6 +26,14 @@ pub struct Stats {
     /// (complex, near the real axis: the DAE engine's look-ahead).
     #[serde(default)]
     pub singularities_passed: usize,
+    /// Corrections stopped at the residual's round-off floor: the residual
+    /// above the tolerance but no longer falling, and the Newton update
+    /// below 16 ε of what the state is held to (correct.rs).
+    #[serde(default)]
+    pub round_off_stops: usize,
+    /// The largest relative residual |R| / |R_lambda| at those stops.
+    #[serde(default)]
+    pub round_off_residual: f64,
     /// Seconds spent assembling tangents (and residuals).
     pub assembly_s: f64,
     pub factorization_s: f64,

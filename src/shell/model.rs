@@ -1022,6 +1022,27 @@ impl ContinuationProblem for ShellModel {
         self.scales()
     }
 
+    /// Translations: the node's distance from the origin, at least the
+    /// model's length scale (a node at the origin still meets neighbours a
+    /// length away); director increments: 1 (|a3| = 1).
+    fn resolution(&self, u: &[f64], lambda: f64) -> Option<Vec<f64>> {
+        let full = self.expand(u, lambda);
+        let mut m = vec![0.0; self.ndof];
+        for (i, f) in self.free.iter().enumerate() {
+            if let Some(k) = f {
+                let node_dof = Dof::of_index(i);
+                m[*k] = if node_dof.component.is_displacement() {
+                    let v = |c| full[dof(node_dof.node, c)];
+                    let x = self.x0[node_dof.node] + Vec3::new(v(0), v(1), v(2));
+                    x.norm().max(self.length_scale)
+                } else {
+                    1.0
+                };
+            }
+        }
+        Some(m)
+    }
+
     fn reserve_orders(&mut self, orders: usize) {
         self.orders = orders;
     }

@@ -20,4 +20,5 @@ mod prepass;
 mod sheet_wrinkling_dolfinx;
 mod step_cost;
 mod strip_wrinkling;
+mod tiny_loads;
 mod verification_scenes;
