@@ -145,6 +145,22 @@ impl Error {
         }
     }
 
+    /// The time or load parameter where numerical trouble arose (None for
+    /// other errors).
+    pub fn at(&self) -> Option<f64> {
+        match self {
+            Error::SingularMatrix { at, .. }
+            | Error::NoConvergence { at, .. }
+            | Error::NonFinite { at, .. }
+            | Error::StepCollapse { at, .. }
+            | Error::OffPath { at, .. }
+            | Error::Interrupted { at, .. }
+            | Error::ContactMissed { at, .. }
+            | Error::TimeSteps { at, .. } => Some(*at),
+            _ => None,
+        }
+    }
+
     /// Numerical trouble a shorter step may avoid (as opposed to bad input
     /// or an output failure).
     pub fn is_numerical(&self) -> bool {

@@ -829,6 +829,9 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
                         if let Some(n) = r.stop_node {
                             println!("  singular point at node {n}");
                         }
+                        if let Some(m) = &r.stop_message {
+                            println!("  {m}");
+                        }
                         for e in &r.events {
                             println!(
                                 "  critical point ({} tangent, {}): t = {:.6e} s, lambda = {:.6e} (between outputs {} and {}; negative pivots {} -> {}), {}",
@@ -843,10 +846,13 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
                                 e.mode.as_deref().unwrap_or("")
                             );
                         }
-                        return Ok(if r.stop == "interrupted" {
-                            ExitCode::from(130)
-                        } else {
-                            ExitCode::SUCCESS
+                        // A stop on numerical trouble is a failure (its
+                        // files hold the run up to there); a detected
+                        // singularity is a result.
+                        return Ok(match r.stop.as_str() {
+                            "end" | "singularity" => ExitCode::SUCCESS,
+                            "interrupted" => ExitCode::from(130),
+                            _ => ExitCode::from(2),
                         });
                     }
                     // Ctrl-C / SIGTERM end a shell run at the next step end.

@@ -57,11 +57,15 @@ pub struct TimeReport {
     pub corrections: usize,
     pub max_residual: f64,
     pub wall_s: f64,
-    /// "end" or "singularity".
+    /// "end", "singularity", "interrupted", or the kind of the numerical
+    /// trouble that stopped the run (e.g. "time_steps").
     pub stop: String,
     pub stop_t: f64,
     /// 1-based node of a singularity.
     pub stop_node: Option<usize>,
+    /// The diagnosis of a run stopped by numerical trouble.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stop_message: Option<String>,
     /// The columns of history.csv at its last row.
     pub end: BTreeMap<String, f64>,
     /// history.csv's header and rows (not in summary.json).
@@ -131,10 +135,12 @@ pub fn config(scene: &ShellScene) -> TimeConfig {
 
 /// Solves a friction scene in time (no files).
 pub fn solve(scene: &ShellScene) -> Result<(TimeRun, FrictionDae)> {
-    solve_with(scene, false)
+    solve_with(scene, false, false)
 }
 
-fn solve_with(scene: &ShellScene, progress: bool) -> Result<(TimeRun, FrictionDae)> {
+/// [`solve`]; with `keeping`, numerical trouble after the start ends the
+/// run with what it computed ([`time_path::run_keeping`]).
+fn solve_with(scene: &ShellScene, progress: bool, keeping: bool) -> Result<(TimeRun, FrictionDae)> {
     let mut dae = problem(scene)?;
     let cfg = config(scene);
     let bar = progress.then(|| {
@@ -152,7 +158,11 @@ fn solve_with(scene: &ShellScene, progress: bool) -> Result<(TimeRun, FrictionDa
             b.set_message(format!("t = {t:.4e} s, {steps} steps"));
         }
     };
-    let run = time_path::run(&mut dae, &cfg, &mut show);
+    let run = if keeping {
+        time_path::run_keeping(&mut dae, &cfg, &mut show)
+    } else {
+        time_path::run(&mut dae, &cfg, &mut show)
+    };
     if let Some(b) = &bar {
         b.finish_and_clear();
     }
@@ -300,7 +310,7 @@ pub fn run(scene: &ShellScene, out_dir: Option<&Path>) -> Result<TimeReport> {
 /// [`run`] with a progress bar on stderr.
 pub fn run_with(scene: &ShellScene, out_dir: Option<&Path>, progress: bool) -> Result<TimeReport> {
     let start = Instant::now();
-    let (run, mut dae) = solve_with(scene, progress)?;
+    let (run, mut dae) = solve_with(scene, progress, true)?;
     let mut head = header(scene);
     let areas = scene.mesh.node_areas();
     let mut rows: Vec<Vec<f64>> = run
@@ -379,10 +389,11 @@ pub fn run_with(scene: &ShellScene, out_dir: Option<&Path>, progress: bool) -> R
         });
     }
     let last = run.samples.last().expect("the sample at t = 0");
-    let (stop, stop_t, stop_node) = match run.stop {
-        TimeStop::End => ("end", last.t, None),
-        TimeStop::Singularity { t, node } => ("singularity", t, Some(node + 1)),
-        TimeStop::Interrupted { t } => ("interrupted", t, None),
+    let (stop, stop_t, stop_node, stop_message) = match &run.stop {
+        TimeStop::End => ("end", last.t, None, None),
+        TimeStop::Singularity { t, node } => ("singularity", *t, Some(node + 1), None),
+        TimeStop::Interrupted { t } => ("interrupted", *t, None, None),
+        TimeStop::Failed { t, kind, message } => (*kind, *t, None, Some(message.clone())),
     };
     let mut report = TimeReport {
         scene: scene.file.display().to_string(),
@@ -405,6 +416,7 @@ pub fn run_with(scene: &ShellScene, out_dir: Option<&Path>, progress: bool) -> R
         stop: stop.into(),
         stop_t,
         stop_node,
+        stop_message,
         end: head
             .iter()
             .cloned()

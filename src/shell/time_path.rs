@@ -100,6 +100,14 @@ pub enum TimeStop {
     Interrupted {
         t: f64,
     },
+    /// Numerical trouble after the start ([`run_keeping`] only): the
+    /// error's kind and diagnosis, the last step end t; the samples are
+    /// those computed before it.
+    Failed {
+        t: f64,
+        kind: &'static str,
+        message: String,
+    },
 }
 
 /// Counters of a run.
@@ -142,23 +150,73 @@ pub fn run(
 }
 
 /// Integrates from the state `s` (made consistent first) to t_end; the
-/// first sample is at s.t, then every output time after it.
+/// first sample is at s.t, then every output time after it. Any failure
+/// is an error.
 pub fn run_from(
     dae: &mut FrictionDae,
     cfg: &TimeConfig,
     progress: &mut dyn FnMut(f64, usize),
-    mut s: TimeState,
+    s: TimeState,
 ) -> Result<TimeRun> {
+    let mut samples = vec![];
     let mut stats = TimeStats::default();
+    let stop = integrate(dae, cfg, progress, s, &mut samples, &mut stats)?;
+    Ok(finish(dae, samples, stop, stats))
+}
+
+/// [`run`], keeping what was computed when numerical trouble (no
+/// convergence, a collapsed step, the step budget, a singular matrix, a
+/// non-finite value) stops the run after its start: the stop is then
+/// [`TimeStop::Failed`] with the diagnosis, and the samples are those
+/// before it. A failure at the start, or any other error, is an error.
+pub fn run_keeping(
+    dae: &mut FrictionDae,
+    cfg: &TimeConfig,
+    progress: &mut dyn FnMut(f64, usize),
+) -> Result<TimeRun> {
+    let mut samples = vec![];
+    let mut stats = TimeStats::default();
+    let start = TimeState {
+        t: 0.0,
+        u: vec![0.0; dae.model.ndof()],
+        w: vec![[0.0; 2]; dae.model.pairs.len()],
+    };
+    let stop = match integrate(dae, cfg, progress, start, &mut samples, &mut stats) {
+        Ok(stop) => stop,
+        Err(e) if stops_a_run(&e) && !samples.is_empty() => TimeStop::Failed {
+            t: e.at()
+                .unwrap_or_else(|| samples.last().map_or(0.0, |s| s.t)),
+            kind: e.kind(),
+            message: e.to_string(),
+        },
+        Err(e) => return Err(e),
+    };
+    Ok(finish(dae, samples, stop, stats))
+}
+
+/// Numerical trouble, as opposed to bad input or a failed write.
+fn stops_a_run(e: &Error) -> bool {
+    e.is_numerical() || matches!(e, Error::TimeSteps { .. } | Error::StepCollapse { .. })
+}
+
+/// The integration behind [`run_from`] and [`run_keeping`]: samples and
+/// counters go to `samples` and `stats` as they are made.
+fn integrate(
+    dae: &mut FrictionDae,
+    cfg: &TimeConfig,
+    progress: &mut dyn FnMut(f64, usize),
+    mut s: TimeState,
+    samples: &mut Vec<TimeSample>,
+    stats: &mut TimeStats,
+) -> Result<TimeStop> {
     let kinks: Vec<f64> = {
         let mut k: Vec<f64> = dae.laws.kinks();
         k.retain(|&t| t > s.t);
         k.sort_by(f64::total_cmp);
         k
     };
-    let mut samples = vec![];
     let mut next_out = first_output(cfg, s.t);
-    consistent(dae, &mut s, cfg, &mut stats)?;
+    consistent(dae, &mut s, cfg, stats)?;
     samples.push(sample(dae, &s, s.t)?);
     if cfg.stepping != Stepping::Explicit {
         return run_implicit(dae, cfg, progress, s, samples, stats, &kinks);
@@ -166,7 +224,7 @@ pub fn run_from(
     let mut stop = TimeStop::End;
     while s.t < cfg.t_end * (1.0 - 1e-14) {
         if stats.steps > 0 {
-            consistent(dae, &mut s, cfg, &mut stats)?;
+            consistent(dae, &mut s, cfg, stats)?;
         }
         let series = dae.series(&s)?;
         let n_ord = cfg.order;
@@ -202,16 +260,7 @@ pub fn run_from(
                 ),
             });
         }
-        s = series_step(
-            dae,
-            cfg,
-            &series,
-            &s,
-            a,
-            horizon,
-            &mut next_out,
-            &mut samples,
-        )?;
+        s = series_step(dae, cfg, &series, &s, a, horizon, &mut next_out, samples)?;
         stats.steps += 1;
         progress(s.t, stats.steps);
         if !matches!(stop, TimeStop::End) {
@@ -222,7 +271,7 @@ pub fn run_from(
             break;
         }
     }
-    Ok(finish(dae, samples, stop, stats))
+    Ok(stop)
 }
 
 /// The series step of length a from s: the output times it covers are
@@ -398,10 +447,10 @@ fn run_implicit(
     cfg: &TimeConfig,
     progress: &mut dyn FnMut(f64, usize),
     mut s: TimeState,
-    mut samples: Vec<TimeSample>,
-    mut stats: TimeStats,
+    samples: &mut Vec<TimeSample>,
+    stats: &mut TimeStats,
     kinks: &[f64],
-) -> Result<TimeRun> {
+) -> Result<TimeStop> {
     use super::implicit_step::{self, Trial};
     use crate::series::rodas::{ERROR_ORDER, RODAS4};
     let mut next_out = first_output(cfg, s.t);
@@ -489,16 +538,7 @@ fn run_implicit(
                 let a = a_exp.min(horizon - s.t);
                 if a >= length && a >= cfg.min_step {
                     let t0 = s.t;
-                    s = series_step(
-                        dae,
-                        cfg,
-                        &series,
-                        &s,
-                        a,
-                        horizon,
-                        &mut next_out,
-                        &mut samples,
-                    )?;
+                    s = series_step(dae, cfg, &series, &s, a, horizon, &mut next_out, samples)?;
                     scale = scale.max(size_of(&s.u));
                     h = h.max(a);
                     probe_every = 1;
@@ -657,7 +697,7 @@ fn run_implicit(
         stats.newton += usize::from(accepted.error_order < ERROR_ORDER);
         progress(s.t, stats.steps);
     }
-    Ok(finish(dae, samples, stop, stats))
+    Ok(stop)
 }
 
 /// Steps taken by backward Euler after one that needed it

@@ -1,0 +1,64 @@
+//! A shell run in time stopped by numerical trouble keeps what it computed:
+//! scenes/verification/capstan-breakaway.toml (coarsened to 16 elements)
+//! stops where the strip breaks away, t* = T1 exp(f θ) / T2max, because
+//! the quasi-static solution ceases there. `anm run` used to print the
+//! diagnosis and write no file; it now writes every output up to the stop,
+//! summary.json with the error's kind as `stop`, `stop_t` and
+//! `stop_message`, and exits with 2 (a failure, as a static run's
+//! numerical stop).
+
+use crate::scratch::scratch;
+use std::path::Path;
+use std::process::Command;
+
+#[test]
+fn a_run_in_time_stopped_by_numerical_trouble_writes_its_outputs() {
+    let dir = scratch("numerical-stop");
+    let text = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/verification/capstan-breakaway.toml"),
+    )
+    .unwrap();
+    let text = text.replace("divisions = [1, 64]", "divisions = [1, 16]");
+    assert!(text.contains("divisions = [1, 16]"));
+    let scene = dir.path().join("breakaway.toml");
+    std::fs::write(&scene, text).unwrap();
+    let out = dir.path().join("out");
+    let run = Command::new(env!("CARGO_BIN_EXE_anm"))
+        .args(["run", "--quiet"])
+        .arg(&scene)
+        .arg("-o")
+        .arg(&out)
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&run.stdout);
+    println!("{stdout}");
+    assert_eq!(run.status.code(), Some(2), "{run:?}");
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let stop_t = summary["stop_t"].as_f64().unwrap();
+    let message = summary["stop_message"].as_str().unwrap();
+    assert_eq!(summary["stop"], "time_steps", "{summary}");
+    assert!(message.contains("may cease to exist"), "{message}");
+    assert!(stdout.contains(message), "the diagnosis is printed");
+    // f = 0.2, θ = π, T1 = 20 N, T2max = 150 N; the coarse arc's
+    // discretization puts the stop 2.1e-3 from it.
+    let closed = 20.0 * (0.2 * std::f64::consts::PI).exp() / 150.0;
+    assert!((stop_t / closed - 1.0).abs() < 1e-2, "{stop_t} vs {closed}");
+    // The history up to the stop, finite, nothing beyond.
+    let history = std::fs::read_to_string(out.join("history.csv")).unwrap();
+    let rows: Vec<Vec<f64>> = history
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').map(|x| x.parse().unwrap()).collect())
+        .collect();
+    assert!(rows.len() > 10, "{} rows", rows.len());
+    assert!(rows.iter().flatten().all(|x| x.is_finite()));
+    let last_t = rows.last().unwrap()[0];
+    assert!(
+        last_t <= stop_t && stop_t - last_t < 0.011,
+        "last row {last_t}, stop {stop_t}"
+    );
+    for file in ["friction.csv", "friction.vtu", "along.csv"] {
+        assert!(out.join(file).exists(), "{file}");
+    }
+}
