@@ -790,6 +790,11 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
         } => {
             if let Some(dir) = resume {
                 anm::run::interrupt::install();
+                if anm::run::time_checkpoint::TimeCheckpoint::is_in(&dir) {
+                    let r = anm::run::shell_time::resume(&dir, !quiet)
+                        .with_context(|| format!("resuming the run in {}", dir.display()))?;
+                    return Ok(time_summary(&r, &dir));
+                }
                 let report = anm::run::shell::resume(&dir, !quiet)
                     .with_context(|| format!("resuming the run in {}", dir.display()))?;
                 return Ok(shell_summary(&report, &dir));
@@ -811,49 +816,7 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
                         anm::run::interrupt::install();
                         let r = anm::run::shell_time::run_with(&sc, Some(&out), !quiet)
                             .map_err(|e| running(e, &scene))?;
-                        println!(
-                            "{}: stop = {} at t = {:.6} s; {} steps ({} implicit, {} of them fully implicit; time_step = {}), {} factorizations, {} corrections, {:.3} s; {} friction nodes; outputs in {}",
-                            scene.display(),
-                            r.stop,
-                            r.stop_t,
-                            r.steps,
-                            r.implicit_steps,
-                            r.newton_steps,
-                            r.time_step,
-                            r.factorizations,
-                            r.corrections,
-                            r.wall_s,
-                            r.friction_nodes,
-                            out.display()
-                        );
-                        if let Some(n) = r.stop_node {
-                            println!("  singular point at node {n}");
-                        }
-                        if let Some(m) = &r.stop_message {
-                            println!("  {m}");
-                        }
-                        for e in &r.events {
-                            println!(
-                                "  critical point ({} tangent, {}): t = {:.6e} s, lambda = {:.6e} (between outputs {} and {}; negative pivots {} -> {}), {}",
-                                e.tangent,
-                                e.detected_by,
-                                e.t,
-                                e.lambda,
-                                e.bracket[0],
-                                e.bracket[1],
-                                e.negative_pivots[0],
-                                e.negative_pivots[1],
-                                e.mode.as_deref().unwrap_or("")
-                            );
-                        }
-                        // A stop on numerical trouble is a failure (its
-                        // files hold the run up to there); a detected
-                        // singularity is a result.
-                        return Ok(match r.stop.as_str() {
-                            "end" | "singularity" => ExitCode::SUCCESS,
-                            "interrupted" => ExitCode::from(130),
-                            _ => ExitCode::from(2),
-                        });
+                        return Ok(time_summary(&r, &out));
                     }
                     // Ctrl-C / SIGTERM end a shell run at the next step end.
                     anm::run::interrupt::install();
@@ -1076,6 +1039,54 @@ fn load(
     match kind {
         Kind::Shell => Ok((kind, None)),
         _ => Ok((kind, Some(scene::friction::load(path, &text, kind)?))),
+    }
+}
+
+/// Prints a shell run in time's summary line and diagnosis; exit code 0 at
+/// the end or a detected singularity, 130 when interrupted, 2 on numerical
+/// trouble.
+fn time_summary(r: &anm::run::shell_time::TimeReport, out: &std::path::Path) -> ExitCode {
+    println!(
+        "{}: stop = {} at t = {:.6} s; {} steps ({} implicit, {} of them fully implicit; time_step = {}), {} factorizations, {} corrections, {:.3} s; {} friction nodes; outputs in {}",
+        r.scene,
+        r.stop,
+        r.stop_t,
+        r.steps,
+        r.implicit_steps,
+        r.newton_steps,
+        r.time_step,
+        r.factorizations,
+        r.corrections,
+        r.wall_s,
+        r.friction_nodes,
+        out.display()
+    );
+    if let Some(n) = r.stop_node {
+        println!("  singular point at node {n}");
+    }
+    if let Some(m) = &r.stop_message {
+        println!("  {m}");
+    }
+    for e in &r.events {
+        println!(
+            "  critical point ({} tangent, {}): t = {:.6e} s, lambda = {:.6e} (between outputs {} and {}; negative pivots {} -> {}), {}",
+            e.tangent,
+            e.detected_by,
+            e.t,
+            e.lambda,
+            e.bracket[0],
+            e.bracket[1],
+            e.negative_pivots[0],
+            e.negative_pivots[1],
+            e.mode.as_deref().unwrap_or("")
+        );
+    }
+    // A stop on numerical trouble is a failure (its files hold the run up
+    // to there); a detected singularity is a result.
+    match r.stop.as_str() {
+        "end" | "singularity" => ExitCode::SUCCESS,
+        "interrupted" => ExitCode::from(130),
+        _ => ExitCode::from(2),
     }
 }
 

@@ -18,5 +18,6 @@ pub mod recorder;
 pub mod section;
 pub mod shell;
 pub mod shell_time;
+pub mod time_checkpoint;
 
 pub use shell::{RunReport, Snapshot, run_loaded, run_scene};

@@ -170,12 +170,16 @@ pub fn resume(out_dir: &Path, progress: bool) -> Result<RunReport> {
         let text = std::fs::read_to_string(out_dir.join("summary.json")).ok()?;
         let v: serde_json::Value = serde_json::from_str(&text).ok()?;
         let stop = &v["stop"];
-        (stop["reason"].as_str()? != "interrupted").then(|| {
-            format!(
-                "the run there has already ended (stop: {} at lambda = {}): nothing to resume",
-                stop["reason"].as_str().unwrap_or("?"),
-                stop["lambda"]
-            )
+        // A run in time writes `stop` as a string with `stop_t`.
+        let (reason, at) = match stop.as_str() {
+            Some(reason) => (reason, format!("t = {}", v["stop_t"])),
+            None => (
+                stop["reason"].as_str()?,
+                format!("lambda = {}", stop["lambda"]),
+            ),
+        };
+        (reason != "interrupted").then(|| {
+            format!("the run there has already ended (stop: {reason} at {at}): nothing to resume")
         })
     };
     let text = match std::fs::read_to_string(&file) {

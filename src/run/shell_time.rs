@@ -21,6 +21,7 @@ use super::along_strip;
 use super::build::build_model;
 use super::probe::{self, State};
 use super::section::{MembraneStress, membrane_stress};
+use super::time_checkpoint::TimeCheckpoint;
 use crate::contact::Motion;
 use crate::error::{Error, Result};
 use crate::output::mode;
@@ -28,7 +29,7 @@ use crate::output::plot::{Curve, Panel, draw};
 use crate::output::vtk::{PointData, write_vtu_cells};
 use crate::scene::shell::ShellScene;
 use crate::series::ContinuationProblem;
-use crate::shell::friction_dae::{FrictionDae, TimeLaws};
+use crate::shell::friction_dae::{FrictionDae, TimeLaws, TimeState};
 use crate::shell::stability::{self, TimeEvent};
 use crate::shell::time_path::{self, TimeConfig, TimeRun, TimeSample, TimeStop};
 use serde::Serialize;
@@ -135,12 +136,19 @@ pub fn config(scene: &ShellScene) -> TimeConfig {
 
 /// Solves a friction scene in time (no files).
 pub fn solve(scene: &ShellScene) -> Result<(TimeRun, FrictionDae)> {
-    solve_with(scene, false, false)
+    solve_with(scene, false, Keep::No)
 }
 
-/// [`solve`]; with `keeping`, numerical trouble after the start ends the
-/// run with what it computed ([`time_path::run_keeping`]).
-fn solve_with(scene: &ShellScene, progress: bool, keeping: bool) -> Result<(TimeRun, FrictionDae)> {
+/// How [`solve_with`] treats numerical trouble, and where it starts.
+enum Keep {
+    /// Any failure is an error; the run starts at rest.
+    No,
+    /// Numerical trouble after the start ends the run with what it computed
+    /// ([`time_path::run_keeping`]), from rest or from the given state.
+    From(Option<TimeState>),
+}
+
+fn solve_with(scene: &ShellScene, progress: bool, keep: Keep) -> Result<(TimeRun, FrictionDae)> {
     let mut dae = problem(scene)?;
     let cfg = config(scene);
     let bar = progress.then(|| {
@@ -158,10 +166,12 @@ fn solve_with(scene: &ShellScene, progress: bool, keeping: bool) -> Result<(Time
             b.set_message(format!("t = {t:.4e} s, {steps} steps"));
         }
     };
-    let run = if keeping {
-        time_path::run_keeping(&mut dae, &cfg, &mut show)
-    } else {
-        time_path::run(&mut dae, &cfg, &mut show)
+    let run = match keep {
+        Keep::No => time_path::run(&mut dae, &cfg, &mut show),
+        Keep::From(start) => {
+            let start = start.unwrap_or_else(|| time_path::at_rest(&dae));
+            time_path::run_keeping(&mut dae, &cfg, &mut show, start)
+        }
     };
     if let Some(b) = &bar {
         b.finish_and_clear();
@@ -310,7 +320,45 @@ pub fn run(scene: &ShellScene, out_dir: Option<&Path>) -> Result<TimeReport> {
 /// [`run`] with a progress bar on stderr.
 pub fn run_with(scene: &ShellScene, out_dir: Option<&Path>, progress: bool) -> Result<TimeReport> {
     let start = Instant::now();
-    let (run, mut dae) = solve_with(scene, progress, true)?;
+    let (run, dae) = solve_with(scene, progress, Keep::From(None))?;
+    report(scene, run, dae, out_dir, start.elapsed().as_secs_f64())
+}
+
+/// Continues the interrupted shell run in time in `out_dir` from its
+/// checkpoint.json (run::time_checkpoint): from the state of the last
+/// output time written, to the end, with the same files as a run that was
+/// not interrupted.
+pub fn resume(out_dir: &Path, progress: bool) -> Result<TimeReport> {
+    let start = Instant::now();
+    let cp = TimeCheckpoint::read(out_dir)?;
+    let scene = cp.scene()?;
+    let earlier = cp.samples();
+    let from = earlier.last().map(|s| s.state.clone());
+    let (mut run, dae) = solve_with(&scene, progress, Keep::From(from))?;
+    // The resumed run's first sample is the checkpoint's last one.
+    let mut samples = earlier;
+    samples.extend(run.samples.drain(..).skip(1));
+    run.samples = samples;
+    run.stats = cp.stats.merged(&run.stats);
+    report(
+        &scene,
+        run,
+        dae,
+        Some(out_dir),
+        cp.wall_s + start.elapsed().as_secs_f64(),
+    )
+}
+
+/// The report and files of a run (`wall_before`: seconds spent before the
+/// outputs, by this process and by the run it resumes).
+fn report(
+    scene: &ShellScene,
+    run: TimeRun,
+    mut dae: FrictionDae,
+    out_dir: Option<&Path>,
+    wall_before: f64,
+) -> Result<TimeReport> {
+    let start = Instant::now();
     let mut head = header(scene);
     let areas = scene.mesh.node_areas();
     let mut rows: Vec<Vec<f64>> = run
@@ -379,7 +427,7 @@ pub fn run_with(scene: &ShellScene, out_dir: Option<&Path>, progress: bool) -> R
             e.wave_direction = Some(w.direction.to_string());
         }
     }
-    let wall_s = start.elapsed().as_secs_f64();
+    let wall_s = wall_before + start.elapsed().as_secs_f64();
     if let Some(r) = rows.iter().flatten().find(|v| !v.is_finite()) {
         return Err(Error::NonFinite {
             step: run.stats.steps,
@@ -501,6 +549,13 @@ pub fn run_with(scene: &ShellScene, out_dir: Option<&Path>, progress: bool) -> R
         let text =
             serde_json::to_string_pretty(&report).map_err(|e| write_err(&file)(e.to_string()))?;
         std::fs::write(&file, text).map_err(|source| Error::Io { file, source })?;
+        // Interrupted: what `--resume` continues from; else no checkpoint
+        // (a resumed run that ends removes it).
+        if matches!(run.stop, TimeStop::Interrupted { .. }) {
+            TimeCheckpoint::new(scene, &run, wall_s)?.write(dir)?;
+        } else {
+            TimeCheckpoint::remove(dir)?;
+        }
     }
     Ok(report)
 }

@@ -111,7 +111,7 @@ pub enum TimeStop {
 }
 
 /// Counters of a run.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
 pub struct TimeStats {
     pub steps: usize,
     /// Implicit steps whose error test failed (retried shorter).
@@ -124,6 +124,21 @@ pub struct TimeStats {
     pub factorizations: usize,
     pub corrections: usize,
     pub max_residual: f64,
+}
+
+impl TimeStats {
+    /// The counters of a run followed by `later` (a resumed run).
+    pub fn merged(&self, later: &TimeStats) -> TimeStats {
+        TimeStats {
+            steps: self.steps + later.steps,
+            rejected: self.rejected + later.rejected,
+            implicit: self.implicit + later.implicit,
+            newton: self.newton + later.newton,
+            factorizations: self.factorizations + later.factorizations,
+            corrections: self.corrections + later.corrections,
+            max_residual: self.max_residual.max(later.max_residual),
+        }
+    }
 }
 
 pub struct TimeRun {
@@ -141,11 +156,7 @@ pub fn run(
     cfg: &TimeConfig,
     progress: &mut dyn FnMut(f64, usize),
 ) -> Result<TimeRun> {
-    let start = TimeState {
-        t: 0.0,
-        u: vec![0.0; dae.model.ndof()],
-        w: vec![[0.0; 2]; dae.model.pairs.len()],
-    };
+    let start = at_rest(dae);
     run_from(dae, cfg, progress, start)
 }
 
@@ -164,7 +175,16 @@ pub fn run_from(
     Ok(finish(dae, samples, stop, stats))
 }
 
-/// [`run`], keeping what was computed when numerical trouble (no
+/// The state at rest at t = 0 (U = 0), where [`run`] starts.
+pub fn at_rest(dae: &FrictionDae) -> TimeState {
+    TimeState {
+        t: 0.0,
+        u: vec![0.0; dae.model.ndof()],
+        w: vec![[0.0; 2]; dae.model.pairs.len()],
+    }
+}
+
+/// [`run_from`], keeping what was computed when numerical trouble (no
 /// convergence, a collapsed step, the step budget, a singular matrix, a
 /// non-finite value) stops the run after its start: the stop is then
 /// [`TimeStop::Failed`] with the diagnosis, and the samples are those
@@ -173,14 +193,10 @@ pub fn run_keeping(
     dae: &mut FrictionDae,
     cfg: &TimeConfig,
     progress: &mut dyn FnMut(f64, usize),
+    start: TimeState,
 ) -> Result<TimeRun> {
     let mut samples = vec![];
     let mut stats = TimeStats::default();
-    let start = TimeState {
-        t: 0.0,
-        u: vec![0.0; dae.model.ndof()],
-        w: vec![[0.0; 2]; dae.model.pairs.len()],
-    };
     let stop = match integrate(dae, cfg, progress, start, &mut samples, &mut stats) {
         Ok(stop) => stop,
         Err(e) if stops_a_run(&e) && !samples.is_empty() => TimeStop::Failed {

@@ -182,3 +182,131 @@ fn sigterm_stops_a_shell_run_in_time_with_its_outputs() {
             .all(|r| r[0] <= t && r.iter().all(|x| x.is_finite()))
     );
 }
+
+/// scenes/strip-conveying.toml coarsened (2 elements across, 0.1 m along,
+/// 0.02 m on the arcs): about 5–9 s here.
+fn coarse_conveying() -> crate::scratch::ScratchFile {
+    let text = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/strip-conveying.toml"),
+    )
+    .unwrap();
+    let coarse = text
+        .replace("divisions_across = 8", "divisions_across = 2")
+        .replace("element_length = 0.05", "element_length = 0.1")
+        .replace("arc_element_length = 0.01", "arc_element_length = 0.02");
+    assert!(coarse.contains("divisions_across = 2") && coarse.contains("= 0.02"));
+    crate::scratch::ScratchFile::with_text("in-time-resume", "conveying.toml", &coarse)
+}
+
+fn table(path: &Path) -> (Vec<String>, Vec<Vec<f64>>) {
+    let text = std::fs::read_to_string(path).unwrap();
+    let head = text
+        .lines()
+        .next()
+        .unwrap()
+        .split(',')
+        .map(String::from)
+        .collect();
+    (head, rows(path))
+}
+
+#[test]
+fn sigterm_then_resume_a_shell_run_in_time_matches_an_uninterrupted_run() {
+    let scene = coarse_conveying();
+    let run = |out: &Path| {
+        Command::new(env!("CARGO_BIN_EXE_anm"))
+            .args(["run", "--quiet"])
+            .arg(&*scene)
+            .arg("-o")
+            .arg(out)
+            .stdout(std::process::Stdio::null())
+            .spawn()
+            .unwrap()
+    };
+    let full = tmp("in-time-full");
+    let start = Instant::now();
+    assert_eq!(run(&full).wait().unwrap().code(), Some(0));
+    let wall = start.elapsed();
+    // Interrupted halfway (a later try waits longer if the stop came
+    // before the third output time, 0.04 s).
+    let cut = tmp("in-time-cut");
+    let mut wait = wall / 2;
+    let stop_t = loop {
+        let mut child = run(&cut);
+        std::thread::sleep(wait);
+        Command::new("kill")
+            .args(["-TERM", &child.id().to_string()])
+            .status()
+            .unwrap();
+        let code = child.wait().unwrap().code();
+        let s = summary(&cut);
+        if code == Some(0) {
+            // Ended before the signal: try earlier.
+            wait /= 2;
+            continue;
+        }
+        assert_eq!(code, Some(130));
+        assert_eq!(s["stop"], "interrupted");
+        let t = s["stop_t"].as_f64().unwrap();
+        if t >= 0.04 || wait > 4 * wall {
+            break t;
+        }
+        wait += wall / 4;
+    };
+    assert!(cut.join("checkpoint.json").exists());
+    let resumed = Command::new(env!("CARGO_BIN_EXE_anm"))
+        .args(["run", "--quiet", "--resume"])
+        .arg(&cut)
+        .output()
+        .unwrap();
+    assert_eq!(resumed.status.code(), Some(0), "{resumed:?}");
+    assert_eq!(summary(&cut)["stop"], "end");
+    assert!(
+        !cut.join("checkpoint.json").exists(),
+        "the ended run keeps no checkpoint"
+    );
+    // Again: the run has ended.
+    let again = Command::new(env!("CARGO_BIN_EXE_anm"))
+        .args(["run", "--quiet", "--resume"])
+        .arg(&cut)
+        .output()
+        .unwrap();
+    assert_ne!(again.status.code(), Some(0));
+    assert!(String::from_utf8_lossy(&again.stderr).contains("already ended"));
+
+    // The same history as the uninterrupted run, to the accuracy of the
+    // integration: the resumed run restarts its step sequence at the last
+    // output time before the stop. Forces compared at the scale of the
+    // friction force (ft_x is round-off, 1e-8 N against 1.5e3 N).
+    let (head, a) = table(&full.join("history.csv"));
+    let (head_b, b) = table(&cut.join("history.csv"));
+    assert_eq!(head, head_b);
+    assert_eq!(a.len(), b.len());
+    let col_max = |j: usize| a.iter().map(|r| r[j].abs()).fold(0.0, f64::max);
+    let ft_scale = ["ft_x", "ft_y", "ft_z"]
+        .iter()
+        .map(|n| col_max(head.iter().position(|h| h == n).unwrap()))
+        .fold(0.0, f64::max);
+    let mut worst = (0.0f64, String::new());
+    for (j, name) in head.iter().enumerate() {
+        let scale = if name.starts_with("ft_") {
+            ft_scale
+        } else {
+            col_max(j)
+        };
+        let d = a
+            .iter()
+            .zip(&b)
+            .map(|(x, y)| (x[j] - y[j]).abs())
+            .fold(0.0, f64::max);
+        let rel = if scale > 0.0 { d / scale } else { d };
+        if rel > worst.0 {
+            worst = (rel, name.clone());
+        }
+    }
+    println!(
+        "interrupted at t = {stop_t:.4} s; resumed run vs uninterrupted: largest difference {:.2e} of the column's largest value ({})",
+        worst.0, worst.1
+    );
+    assert!(worst.0 <= 1e-4, "{worst:?}");
+}
