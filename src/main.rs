@@ -812,7 +812,7 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
                         }
                         fresh_output(&out)?;
                         // Ctrl-C / SIGTERM end the run at the next step end
-                        // with its outputs (no resume in time yet).
+                        // with its outputs and a checkpoint (--resume).
                         anm::run::interrupt::install();
                         let r = anm::run::shell_time::run_with(&sc, Some(&out), !quiet)
                             .map_err(|e| running(e, &scene))?;
