@@ -419,7 +419,8 @@ pub fn correct_noting_start<P: ContinuationProblem + ?Sized>(
         // that would lower it is below what the state is held to. Iterating
         // on would only add noise (a cantilever under a 1e-3 N tip load:
         // |R| 1.1–1.3e-8 N from iteration 1 on, updates ≤ 5 ε |x|).
-        if it > 0 && res > STALL * prev_res && below_round_off(problem, &u, l, &du) {
+        let dl_below = dl.abs() <= ROUND_OFF * l.abs().max(metric.lambda_scale());
+        if it > 0 && res > STALL * prev_res && dl_below && below_round_off(problem, &u, l, &du) {
             stats.round_off_stops += 1;
             stats.round_off_residual = stats.round_off_residual.max(res);
             return Ok(Corrected {
@@ -446,6 +447,10 @@ pub fn correct_noting_start<P: ContinuationProblem + ?Sized>(
 /// stopped converging (Newton contracts far faster where it converges).
 const STALL: f64 = 0.5;
 
+/// An update below this fraction of what a value is held to cannot change
+/// it (16 ε; the cantilever of the comment above: 0.5–5 ε).
+const ROUND_OFF: f64 = 16.0 * f64::EPSILON;
+
 /// Whether every entry of the update is at most 16 ε m_i, with m_i the
 /// magnitude the state behind unknown i is held to
 /// ([`ContinuationProblem::resolution`]; false where the problem gives none).
@@ -456,11 +461,9 @@ fn below_round_off<P: ContinuationProblem + ?Sized>(
     lambda: f64,
     du: &[f64],
 ) -> bool {
-    problem.resolution(u, lambda).is_some_and(|m| {
-        du.iter()
-            .zip(&m)
-            .all(|(d, m)| d.abs() <= 16.0 * f64::EPSILON * m)
-    })
+    problem
+        .resolution(u, lambda)
+        .is_some_and(|m| du.iter().zip(&m).all(|(d, m)| d.abs() <= ROUND_OFF * m))
 }
 
 /// Backtracking along the Newton update from (u0, l0) to (u, l) (at full
