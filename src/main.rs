@@ -774,6 +774,17 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
             }
             use anm::study::buckle::Base;
             let base = time.map_or(Base::Lambda(lambda), Base::Time);
+            if let Some(d) = &out {
+                // Fewer modes than an earlier analysis: no stale mode files.
+                let removed = anm::output::earlier_run::clear_buckling(d)?;
+                if !removed.is_empty() {
+                    eprintln!(
+                        "note: removed {} files of an earlier buckling analysis from {}",
+                        removed.len(),
+                        d.display()
+                    );
+                }
+            }
             let report = anm::study::buckle::buckle(&sc, base, modes, out.as_deref())
                 .with_context(|| format!("buckling analysis of {}", scene.display()))?;
             print!("{}", anm::study::buckle::table(&report));

@@ -5,7 +5,9 @@
 //! earlier run's snapshots, mode shapes or checkpoint beside its own, and
 //! read as part of it (a stale checkpoint.json would even be resumed). A
 //! new run therefore removes, before it writes, every file whose name is
-//! one that a run writes; any other file in the directory is left alone.
+//! one that a run writes; any other file in the directory is left alone. A
+//! buckling analysis (`anm buckle -o DIR`) removes only its own earlier
+//! files, so that it can share a directory with a run.
 
 use crate::error::{Error, Result};
 use std::path::{Path, PathBuf};
@@ -19,8 +21,6 @@ const FIXED: &[&str] = &[
     "contact_final.csv",
     "friction.csv",
     "along.csv",
-    "buckle.csv",
-    "buckle.json",
     "checkpoint.json",
     "checkpoint.json.tmp",
     "fields.h5",
@@ -36,21 +36,27 @@ const FIXED: &[&str] = &[
 
 /// Numbered names: prefix, digits, then an optional `_` and a time with
 /// digits and one dot (obstacle_K_T.vtu), then the suffix.
-const NUMBERED: &[(&str, &str)] = &[
-    ("shell_", ".vtu"),
-    ("mode_", ".vtu"),
-    ("buckle_mode_", ".vtu"),
-    ("obstacle_", ".vtu"),
-];
+const NUMBERED: &[(&str, &str)] = &[("shell_", ".vtu"), ("mode_", ".vtu"), ("obstacle_", ".vtu")];
+
+/// What `anm buckle -o DIR` writes (kept by a run, removed by a buckling
+/// analysis: the two may share a directory).
+const BUCKLING: &[&str] = &["buckle.json", "buckle.csv"];
 
 /// Whether `name` is the name of a file a run writes.
 pub fn is_run_output(name: &str) -> bool {
-    FIXED.contains(&name)
-        || NUMBERED.iter().any(|(prefix, suffix)| {
-            name.strip_prefix(prefix)
-                .and_then(|rest| rest.strip_suffix(suffix))
-                .is_some_and(numbered_middle)
-        })
+    FIXED.contains(&name) || NUMBERED.iter().any(|n| is_numbered(name, n))
+}
+
+/// Whether `name` is the name of a file a buckling analysis writes.
+pub fn is_buckling_output(name: &str) -> bool {
+    BUCKLING.contains(&name) || is_numbered(name, &("buckle_mode_", ".vtu"))
+}
+
+/// `name` = prefix, a numbered middle, suffix.
+fn is_numbered(name: &str, (prefix, suffix): &(&str, &str)) -> bool {
+    name.strip_prefix(prefix)
+        .and_then(|rest| rest.strip_suffix(suffix))
+        .is_some_and(numbered_middle)
 }
 
 /// `K` or `K_T`: K digits, T digits with at most one dot.
@@ -69,6 +75,16 @@ fn numbered_middle(middle: &str) -> bool {
 /// Removes the files of an earlier run from `dir` (nothing if `dir` does
 /// not exist); returns the removed paths, sorted.
 pub fn clear(dir: &Path) -> Result<Vec<PathBuf>> {
+    remove_where(dir, is_run_output)
+}
+
+/// Removes the files of an earlier buckling analysis from `dir`.
+pub fn clear_buckling(dir: &Path) -> Result<Vec<PathBuf>> {
+    remove_where(dir, is_buckling_output)
+}
+
+/// Removes the files of `dir` whose names pass `named`.
+fn remove_where(dir: &Path, named: fn(&str) -> bool) -> Result<Vec<PathBuf>> {
     let io = |file: &Path| {
         let file = file.to_path_buf();
         move |source| Error::Io { file, source }
@@ -84,7 +100,7 @@ pub fn clear(dir: &Path) -> Result<Vec<PathBuf>> {
         let path = entry.path();
         let is_file = entry.file_type().map_err(io(&path))?.is_file();
         let name = entry.file_name();
-        if is_file && name.to_str().is_some_and(is_run_output) {
+        if is_file && name.to_str().is_some_and(named) {
             std::fs::remove_file(&path).map_err(io(&path))?;
             removed.push(path);
         }
@@ -104,7 +120,6 @@ mod tests {
             "shell_0000.vtu",
             "shell_0240.vtu",
             "mode_3.vtu",
-            "buckle_mode_12.vtu",
             "obstacle_0.vtu",
             "obstacle_1_1.000000.vtu",
             "checkpoint.json",
@@ -121,9 +136,15 @@ mod tests {
             "obstacle_1_2.3.4.vtu",
             "my_plot.svg",
             "history.csv.bak",
+            "buckle.json",
+            "buckle_mode_12.vtu",
         ] {
             assert!(!is_run_output(name), "{name}");
         }
+        for name in ["buckle.json", "buckle.csv", "buckle_mode_12.vtu"] {
+            assert!(is_buckling_output(name), "{name}");
+        }
+        assert!(!is_buckling_output("summary.json"));
     }
 
     #[test]
