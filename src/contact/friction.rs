@@ -76,6 +76,11 @@ impl FrictionLaw {
     /// so that a small omega does not cancel (scalar: q v_s² + omega² Vc²).
     pub fn d_force_vec_d_slip(&self, rn: f64, vs: &Vec3) -> Matrix3<f64> {
         let m = self.slip_magnitude_vec(vs);
+        if self.q == 1.0 && m == 0.0 {
+            // The viscous law R_T = −f |R_N|_reg v_s / Vc at rest without
+            // omega: m^(q−3) m² is 0 · ∞ in the sum below.
+            return Matrix3::identity() * (-self.f * self.normal_magnitude(rn) / self.vc);
+        }
         let c = -self.f * self.normal_magnitude(rn) / self.vc.powf(self.q) * m.powf(self.q - 3.0);
         let w2 = (self.omega * self.vc).powi(2);
         Matrix3::from_fn(|i, j| {
@@ -117,6 +122,11 @@ impl FrictionLaw {
             Some(z) => (rn * rn + z * z).sqrt(),
             None => rn,
         };
+        if self.q == 1.0 {
+            // The viscous law: no power of the slip (whose series, at rest
+            // without omega, would divide by its zero value).
+            return -self.f / self.vc.powf(self.q) * normal;
+        }
         let slip2 = vs2 + (self.omega * self.vc).powi(2);
         // |v|_reg^(q-1) = (v^2 + omega^2 Vc^2)^((q-1)/2): one power, no sqrt.
         -self.f / self.vc.powf(self.q) * normal * slip2.powf(0.5 * (self.q - 1.0))

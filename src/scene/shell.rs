@@ -683,6 +683,23 @@ pub fn load(path: &Path) -> Result<ShellScene> {
             "a scene with [friction] is solved in time by the series (solver.time_step); `newton` and `linear` do not apply: remove solver.method",
         ));
     }
+    if friction.is_some() {
+        // Keys of the continuation in lambda that a run in time would
+        // ignore.
+        let unused = [
+            ("solver.pade", raw.solver.pade.is_some()),
+            ("solver.contact_arclength", raw.solver.contact_arclength.is_some()),
+            ("solver.branch", raw.solver.branch.is_some()),
+            ("solver.branch_direction", raw.solver.branch_direction.is_some()),
+            ("output.snapshots", raw.output.snapshots.is_some()),
+        ];
+        if let Some((key, _)) = unused.iter().find(|(_, present)| *present) {
+            return Err(c.fail(
+                key,
+                "applies to the continuation in lambda, not to a scene in time (with [friction]): remove it",
+            ));
+        }
+    }
     let piecewise = contact.as_ref().is_some_and(|ct| ct.eta == 0.0);
     if piecewise && friction.is_some() {
         return Err(c.fail(
@@ -1506,7 +1523,17 @@ fn friction(
             "needs [contact]: friction acts at the contact nodes",
         ));
     }
-    let f = c.non_negative("friction.f", fr.f)?;
+    let f = c.finite("friction.f", fr.f)?;
+    if f <= 0.0 {
+        // The slip velocities are the unknowns of the friction law: without
+        // friction no equation holds them (a singular tangent).
+        return Err(c.fail(
+            "friction.f",
+            format!(
+                "must be > 0, got {f}: frictionless contact is solved without [friction] (leave it out)"
+            ),
+        ));
+    }
     let q = c.within("friction.q", fr.q, 0.0, 1.0)?;
     let vc = c.positive("friction.Vc", fr.Vc)?;
     // Below q = 1 the law is singular at zero slip without omega.
@@ -1568,6 +1595,12 @@ fn friction(
         Some(v) => c.positive("friction.output_step", v)?,
         None => t_end / 100.0,
     };
+    if output_step > t_end {
+        return Err(c.fail(
+            "friction.output_step",
+            format!("{output_step} s is longer than the run (t_end = {t_end} s): at most t_end"),
+        ));
+    }
     if t_end / output_step > 1e6 {
         return Err(c.fail(
             "friction.output_step",

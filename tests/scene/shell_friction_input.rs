@@ -103,11 +103,32 @@ fn bad_friction_values_name_the_key() {
         "contact.eta",
         "frictionless",
     );
-    // The range is stated: f >= 0, q in [0, 1].
+    // The range is stated: f > 0, q in [0, 1]; f = 0 (no equation for
+    // the slip velocities: a singular tangent at step 0) says how to model
+    // frictionless contact.
     expect_invalid(
         &scene("nf.toml", &[("f = 0.2", "f = -0.1")]),
         "friction.f",
-        ">= 0",
+        "> 0",
+    );
+    expect_invalid(
+        &scene("f0.toml", &[("f = 0.2", "f = 0.0")]),
+        "friction.f",
+        "without [friction]",
+    );
+    // Keys of the continuation in lambda are refused in time.
+    for (key, line) in [
+        ("solver.pade", "pade = true"),
+        ("solver.branch", "branch = \"secondary\""),
+        ("solver.contact_arclength", "contact_arclength = 1.0"),
+    ] {
+        let p = scene("lambda-key.toml", &[("[solver]\n", &format!("[solver]\n{line}\n"))]);
+        expect_invalid(&p, key, "not to a scene in time");
+    }
+    expect_invalid(
+        &scene("late-output.toml", &[("t_end = 2.0", "t_end = 2.0\noutput_step = 3.0")]),
+        "friction.output_step",
+        "at most t_end",
     );
     expect_invalid(
         &scene("q.toml", &[("q = 0.0", "q = 1.5")]),
