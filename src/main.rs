@@ -786,7 +786,7 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
                 }
             }
             let report = anm::study::buckle::buckle(&sc, base, modes, out.as_deref())
-                .with_context(|| format!("buckling analysis of {}", scene.display()))?;
+                .map_err(|e| doing("buckling analysis of", e, &scene))?;
             print!("{}", anm::study::buckle::table(&report));
             if let Some(d) = out {
                 println!("outputs in {}", d.display());
@@ -1140,6 +1140,22 @@ fn shell_summary(report: &anm::run::RunReport, out: &std::path::Path) -> ExitCod
     if let Some(m) = &report.stop.message {
         println!("  {m}");
     }
+    // The critical points the path crossed (summary.json `events`).
+    for e in &report.events {
+        let pivots = e.negative_pivots.map_or(String::new(), |(a, b)| {
+            format!("; negative pivots {a} -> {b}")
+        });
+        let wave = e
+            .wavelength
+            .map_or(String::new(), |w| format!("; wavelength {w:.4e}"));
+        println!(
+            "  {} at lambda = {:.6e} (step {}{pivots}{wave}) {}",
+            e.kind.replace('_', " "),
+            e.lambda,
+            e.step,
+            e.mode.as_deref().unwrap_or("")
+        );
+    }
     match report.stop.reason.as_str() {
         "end" => ExitCode::SUCCESS,
         "interrupted" => ExitCode::from(130),
@@ -1151,11 +1167,17 @@ fn shell_summary(report: &anm::run::RunReport, out: &std::path::Path) -> ExitCod
 /// the scene file (a bad key of the scene: "error: running f.toml: f.toml:
 /// key ..." said the file twice).
 fn running(e: anm::Error, scene: &std::path::Path) -> anyhow::Error {
+    doing("running", e, scene)
+}
+
+/// An error of `what` (e.g. "running") on a scene, with "what SCENE" in
+/// front unless the error already names the scene file.
+fn doing(what: &str, e: anm::Error, scene: &std::path::Path) -> anyhow::Error {
     let names_it = e.to_string().starts_with(&scene.display().to_string());
     let e = anyhow::Error::new(e);
     if names_it {
         e
     } else {
-        e.context(format!("running {}", scene.display()))
+        e.context(format!("{what} {}", scene.display()))
     }
 }

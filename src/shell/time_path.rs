@@ -249,7 +249,7 @@ fn integrate(
                 param: "t",
                 at: s.t,
                 what: format!(
-                    "step budget solver.max_steps = {} spent before t_end = {:.6e} s; node {} carries the largest last series term: the quasi-static solution may cease to exist there (e.g. a pull above what friction can hold), or the regularized law makes the problem stiff (full slip at small omega: docs/shell-friction.md)",
+                    "step budget solver.max_steps = {} spent before t_end = {:.6e} s; node {} carries the largest last series term: the budget may be too small for the run (raise solver.max_steps), the quasi-static solution may cease to exist there (e.g. a pull above what friction can hold), or the regularized law makes the problem stiff (full slip at small omega: docs/shell-friction.md)",
                     cfg.max_steps,
                     cfg.t_end,
                     largest_node(dae, &series.u[n_ord]) + 1
@@ -514,7 +514,7 @@ fn run_implicit(
                 param: "t",
                 at: s.t,
                 what: format!(
-                    "step budget solver.max_steps = {} spent before t_end = {:.6e} s ({} implicit steps rejected); node {} carries the largest error estimate: the quasi-static solution may cease to exist there (e.g. a pull above what friction can hold)",
+                    "step budget solver.max_steps = {} spent before t_end = {:.6e} s ({} implicit steps rejected); node {} carries the largest error estimate: the budget may be too small for the run (raise solver.max_steps), or the quasi-static solution may cease to exist there (e.g. a pull above what friction can hold)",
                     cfg.max_steps,
                     cfg.t_end,
                     stats.rejected,

@@ -213,11 +213,14 @@ pub fn buckle(
             lambda_base_state(scene, l)?
         }
         (Base::Time(t), true) => {
-            if !(t > 0.0 && t.is_finite()) {
+            let t_end = scene.friction.as_ref().map_or(f64::INFINITY, |f| f.t_end);
+            if !(t > 0.0 && t <= t_end) {
                 return Err(Error::Invalid {
                     file: scene.file.clone(),
                     key: "--time".into(),
-                    problem: format!("must be a positive time, got {t}"),
+                    problem: format!(
+                        "must be a time of the scene's run, in (0, friction.t_end = {t_end}] s, got {t}"
+                    ),
                 });
             }
             time_base_state(scene, t)?
@@ -266,7 +269,11 @@ pub fn buckle(
             at: lambda_base,
             detail: format!(
                 "the base state has {neg} negative pivot(s): it is past a critical point; \
-                 linearized buckling needs a stable base state (choose a smaller --lambda)"
+                 linearized buckling needs a stable base state (choose {})",
+                match base {
+                    Base::Time(_) => "an earlier --time",
+                    Base::Lambda(_) => "a smaller --lambda",
+                }
             ),
         });
     }

@@ -122,11 +122,17 @@ fn bad_friction_values_name_the_key() {
         ("solver.branch", "branch = \"secondary\""),
         ("solver.contact_arclength", "contact_arclength = 1.0"),
     ] {
-        let p = scene("lambda-key.toml", &[("[solver]\n", &format!("[solver]\n{line}\n"))]);
+        let p = scene(
+            "lambda-key.toml",
+            &[("[solver]\n", &format!("[solver]\n{line}\n"))],
+        );
         expect_invalid(&p, key, "not to a scene in time");
     }
     expect_invalid(
-        &scene("late-output.toml", &[("t_end = 2.0", "t_end = 2.0\noutput_step = 3.0")]),
+        &scene(
+            "late-output.toml",
+            &[("t_end = 2.0", "t_end = 2.0\noutput_step = 3.0")],
+        ),
         "friction.output_step",
         "at most t_end",
     );
@@ -338,4 +344,23 @@ fn a_load_ramp_is_read_and_bad_ones_are_named() {
     );
     let p = ScratchFile::with_text("shell-friction-input", "own-ramp-static.toml", &without);
     expect_invalid(&p, "load[0].ramp", "applies to scenes in time");
+}
+
+#[test]
+fn an_obstacle_out_of_reach_of_every_contact_node_is_a_warning() {
+    // The floor 5 m below the strip, contact.search_distance 1 m: with
+    // friction the law's faint pull leaves the strip free and a run in time
+    // crawls (a new user's scene: 5,102 steps to t = 5e-4 s of 1 s).
+    let p = scene(
+        "far-floor.toml",
+        &[("point = [0.0, 0.0, -0.01]", "point = [0.0, 0.0, -5.0]")],
+    );
+    let s = load(&p).unwrap();
+    assert!(
+        s.warnings
+            .iter()
+            .any(|w| w.contains("`floor`") && w.contains("beyond contact.search_distance")),
+        "{:?}",
+        s.warnings
+    );
 }
