@@ -822,7 +822,7 @@ fn run_inner(
                 write_fields(&d.join("fields.h5"), scene, &report.snapshots)?;
             }
             if scene.output.plot && report.history.len() > 1 {
-                plot(&d.join("plot.svg"), scene, &report)?;
+                probe_plot(&d.join("plot.svg"), scene, "lambda (-)", &report.history, 1)?;
             }
         }
     }
@@ -1100,8 +1100,16 @@ fn finish_files(rec: &mut Recorder, model: &ShellModel, full: &[f64], lambda: f6
     Ok(())
 }
 
-/// plot.svg: one panel per probe unit (lengths, forces, dimensionless).
-fn plot(path: &Path, scene: &ShellScene, report: &RunReport) -> Result<()> {
+/// plot.svg: one panel per probe unit (lengths, forces, dimensionless),
+/// against the history's first column (`x_label`); probe i is the
+/// history's column `first + i`.
+pub(crate) fn probe_plot(
+    path: &Path,
+    scene: &ShellScene,
+    x_label: &str,
+    history: &[Vec<f64>],
+    first: usize,
+) -> Result<()> {
     let stem = scene
         .file
         .file_stem()
@@ -1137,13 +1145,13 @@ fn plot(path: &Path, scene: &ShellScene, report: &RunReport) -> Result<()> {
         .enumerate()
         .map(|(g, (_, idx))| Panel {
             title: &titles[g],
-            x_label: "lambda (-)",
+            x_label,
             y_label: &ylabels[g],
             curves: idx
                 .iter()
                 .map(|&i| Curve {
                     label: &scene.probes[i].name,
-                    points: report.history.iter().map(|r| (r[0], r[i + 1])).collect(),
+                    points: history.iter().map(|r| (r[0], r[first + i])).collect(),
                 })
                 .collect(),
             log: (false, false),

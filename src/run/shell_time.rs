@@ -529,6 +529,11 @@ fn report(
         w.flush().map_err(|e| write_err(&file)(e.to_string()))?;
         write_fields(&dir.join("friction.vtu"), scene, &dae, last)?;
         plot(&dir.join("friction.svg"), &head, &rows)?;
+        // The probes, as a static run plots them (columns t, lambda, then
+        // the probes).
+        if scene.output.plot && rows.len() > 1 {
+            super::shell::probe_plot(&dir.join("plot.svg"), scene, "t (s)", &rows, 2)?;
+        }
         if let Some(grid) = &scene.mesh.grid {
             let along = along_strip::rows(
                 &dae.model,
