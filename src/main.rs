@@ -776,14 +776,11 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
             let base = time.map_or(Base::Lambda(lambda), Base::Time);
             if let Some(d) = &out {
                 // Fewer modes than an earlier analysis: no stale mode files.
-                let removed = anm::output::earlier_run::clear_buckling(d)?;
-                if !removed.is_empty() {
-                    eprintln!(
-                        "note: removed {} files of an earlier buckling analysis from {}",
-                        removed.len(),
-                        d.display()
-                    );
-                }
+                clear_earlier(
+                    d,
+                    anm::output::earlier_run::clear_buckling,
+                    "buckling analysis",
+                )?;
             }
             let report = anm::study::buckle::buckle(&sc, base, modes, out.as_deref())
                 .map_err(|e| doing("buckling analysis of", e, &scene))?;
@@ -1104,12 +1101,26 @@ fn time_summary(r: &anm::run::shell_time::TimeReport, out: &std::path::Path) -> 
 /// Removes an earlier run's files from the output directory of a new run
 /// (output::earlier_run), saying how many.
 fn fresh_output(out: &std::path::Path) -> anyhow::Result<()> {
-    let removed = anm::output::earlier_run::clear(out)?;
+    clear_earlier(
+        out,
+        anm::output::earlier_run::clear,
+        "run (summary.json, snapshots, modes, checkpoint; other files are kept)",
+    )
+}
+
+/// Removes the files `clear` names in `dir`, saying how many ("files of an
+/// earlier `what`").
+fn clear_earlier(
+    dir: &std::path::Path,
+    clear: fn(&std::path::Path) -> anm::Result<Vec<std::path::PathBuf>>,
+    what: &str,
+) -> anyhow::Result<()> {
+    let removed = clear(dir)?;
     if !removed.is_empty() {
         eprintln!(
-            "note: removed {} files of an earlier run from {} (summary.json, snapshots, modes, checkpoint; other files are kept)",
+            "note: removed {} files of an earlier {what} from {}",
             removed.len(),
-            out.display()
+            dir.display()
         );
     }
     Ok(())

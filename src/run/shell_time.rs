@@ -332,11 +332,10 @@ pub fn resume(out_dir: &Path, progress: bool) -> Result<TimeReport> {
     let start = Instant::now();
     let cp = TimeCheckpoint::read(out_dir)?;
     let scene = cp.scene()?;
-    let earlier = cp.samples();
-    let from = earlier.last().map(|s| s.state.clone());
+    let from = cp.samples.last().map(|s| s.state.clone());
     let (mut run, dae) = solve_with(&scene, progress, Keep::From(from))?;
     // The resumed run's first sample is the checkpoint's last one.
-    let mut samples = earlier;
+    let mut samples = cp.samples;
     samples.extend(run.samples.drain(..).skip(1));
     run.samples = samples;
     run.stats = cp.stats.merged(&run.stats);

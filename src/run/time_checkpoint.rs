@@ -7,9 +7,7 @@
 
 use crate::error::{Error, Result};
 use crate::scene::shell::ShellScene;
-use crate::shell::friction_dae::TimeState;
-use crate::shell::time_path::{NodeFriction, TimeRun, TimeSample, TimeStats};
-use nalgebra::Vector3;
+use crate::shell::time_path::{TimeRun, TimeSample, TimeStats};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
@@ -24,66 +22,20 @@ pub struct TimeCheckpoint {
     /// Seconds the run took up to its interruption.
     pub wall_s: f64,
     pub stats: TimeStats,
-    samples: Vec<SavedSample>,
-}
-
-#[derive(Serialize, Deserialize)]
-struct SavedSample {
-    t: f64,
-    lambda: f64,
-    full: Vec<f64>,
-    friction: Vec<SavedFriction>,
-    u: Vec<f64>,
-    w: Vec<[f64; 2]>,
-}
-
-#[derive(Serialize, Deserialize)]
-struct SavedFriction {
-    pair: usize,
-    node: usize,
-    obstacle: usize,
-    gap: f64,
-    rn: f64,
-    normal: [f64; 3],
-    force: [f64; 3],
-    slip: [f64; 3],
+    /// The samples written so far.
+    pub samples: Vec<TimeSample>,
 }
 
 impl TimeCheckpoint {
     /// The checkpoint of an interrupted run of `scene`.
     pub fn new(scene: &ShellScene, run: &TimeRun, wall_s: f64) -> Result<Self> {
-        let arr = |v: &Vector3<f64>| [v.x, v.y, v.z];
         Ok(Self {
             run: IN_TIME.into(),
             scene_file: scene.file.clone(),
             scene_text: crate::scene::read(&scene.file)?,
             wall_s,
             stats: run.stats.clone(),
-            samples: run
-                .samples
-                .iter()
-                .map(|s| SavedSample {
-                    t: s.t,
-                    lambda: s.lambda,
-                    full: s.full.clone(),
-                    friction: s
-                        .friction
-                        .iter()
-                        .map(|f| SavedFriction {
-                            pair: f.pair,
-                            node: f.node,
-                            obstacle: f.obstacle,
-                            gap: f.gap,
-                            rn: f.rn,
-                            normal: arr(&f.normal),
-                            force: arr(&f.force),
-                            slip: arr(&f.slip),
-                        })
-                        .collect(),
-                    u: s.state.u.clone(),
-                    w: s.state.w.clone(),
-                })
-                .collect(),
+            samples: run.samples.clone(),
         })
     }
 
@@ -154,37 +106,5 @@ impl TimeCheckpoint {
             });
         }
         crate::scene::shell::load(&self.scene_file)
-    }
-
-    /// The samples written so far.
-    pub fn samples(&self) -> Vec<TimeSample> {
-        let vec = |a: &[f64; 3]| Vector3::new(a[0], a[1], a[2]);
-        self.samples
-            .iter()
-            .map(|s| TimeSample {
-                t: s.t,
-                lambda: s.lambda,
-                full: s.full.clone(),
-                friction: s
-                    .friction
-                    .iter()
-                    .map(|f| NodeFriction {
-                        pair: f.pair,
-                        node: f.node,
-                        obstacle: f.obstacle,
-                        gap: f.gap,
-                        rn: f.rn,
-                        normal: vec(&f.normal),
-                        force: vec(&f.force),
-                        slip: vec(&f.slip),
-                    })
-                    .collect(),
-                state: TimeState {
-                    t: s.t,
-                    u: s.u.clone(),
-                    w: s.w.clone(),
-                },
-            })
-            .collect()
     }
 }

@@ -68,7 +68,7 @@ impl TimeLaws {
 
 /// The state at a step start: t, the free dofs and the tangential velocity
 /// unknowns of every contact pair of the model (zero where inactive).
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct TimeState {
     pub t: f64,
     pub u: Vec<f64>,

@@ -56,7 +56,7 @@ pub struct TimeConfig {
 }
 
 /// The friction state of one node at an output time.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct NodeFriction {
     /// Index into the model's contact pairs.
     pub pair: usize,
@@ -73,7 +73,7 @@ pub struct NodeFriction {
 }
 
 /// The solution at an output time.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct TimeSample {
     pub t: f64,
     /// Load factor λ(t).

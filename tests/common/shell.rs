@@ -95,3 +95,71 @@ pub fn assert_stored(data: &serde_json::Value, key: &str, ours: f64) {
         "{key}: dolfinx {theirs}, scene {ours}"
     );
 }
+
+/// The clamped cantilever 1 × 0.1 × 0.01 m, E = 2e9 Pa, ν = 0, 20 × 2
+/// elements, under a tip line load of `q` N/m on the edge s1 (total 0.1 q
+/// N), written in metres (`unit` = 1) or in millimetres and MPa (`unit` =
+/// 1e3, the load in N/mm), solved by `method` to `lambda_end` with outputs
+/// every `lambda_step`; probes Rz, Rx (clamp reactions) and uz_tip.
+pub fn cantilever_scene(
+    unit: f64,
+    q: f64,
+    method: &str,
+    lambda_end: f64,
+    lambda_step: f64,
+) -> String {
+    let young = 2e9 / (unit * unit);
+    let q = q / unit;
+    let (l, b, t) = (unit, 0.05 * unit, 0.01 * unit);
+    format!(
+        r#"
+[scene]
+kind = "shell"
+
+[mesh]
+type = "rectangle"
+x = [0.0, {l}]
+y = [-{b}, {b}]
+divisions = [20, 2]
+
+[material]
+young = {young}
+poisson = 0.0
+
+[shell]
+thickness = {t}
+
+[[fix]]
+group = "s0"
+clamp = true
+
+[[load]]
+edge = "s1"
+line_force = [0.0, 0.0, {q}]
+
+[[probe]]
+name = "Rz"
+quantity = "reaction_z"
+group = "s0"
+
+[[probe]]
+name = "Rx"
+quantity = "reaction_x"
+group = "s0"
+
+[[probe]]
+name = "uz_tip"
+quantity = "uz"
+group = "s1"
+
+[solver]
+method = "{method}"
+lambda_end = {lambda_end}
+
+[output]
+lambda_step = {lambda_step}
+vtk_every = 0
+plot = false
+"#
+    )
+}

@@ -7,61 +7,10 @@
 use crate::scratch::ScratchFile;
 use anm::run::run_loaded;
 
-/// A clamped cantilever 1 × 0.1 × 0.01 m, E = 2e9 Pa, under a tip line
-/// load of `q` N/m on the edge s1 (total 0.1 q N), `lambda_end` and
-/// `lambda_step` as given.
+/// The shared cantilever (shell_common::cantilever_scene) in metres, solved
+/// by the linear method.
 fn cantilever(q: f64, lambda_end: f64, lambda_step: f64) -> String {
-    format!(
-        r#"
-[scene]
-kind = "shell"
-
-[mesh]
-type = "rectangle"
-x = [0.0, 1.0]
-y = [-0.05, 0.05]
-divisions = [20, 2]
-
-[material]
-young = 2e9
-poisson = 0.0
-
-[shell]
-thickness = 0.01
-
-[[fix]]
-group = "s0"
-clamp = true
-
-[[load]]
-edge = "s1"
-line_force = [0.0, 0.0, {q}]
-
-[[probe]]
-name = "Rz"
-quantity = "reaction_z"
-group = "s0"
-
-[[probe]]
-name = "Rx"
-quantity = "reaction_x"
-group = "s0"
-
-[[probe]]
-name = "uz_tip"
-quantity = "uz"
-group = "s1"
-
-[solver]
-method = "linear"
-lambda_end = {lambda_end}
-
-[output]
-lambda_step = {lambda_step}
-vtk_every = 0
-plot = false
-"#
-    )
+    crate::shell_common::cantilever_scene(1.0, q, "linear", lambda_end, lambda_step)
 }
 
 #[test]

@@ -11,59 +11,11 @@
 use crate::scratch::ScratchFile;
 use anm::run::run_loaded;
 
-/// The clamped cantilever 1 × 0.1 × 0.01 m, E = 2e9 Pa, ν = 0, under a
-/// tip line load of 1e-2 N/m (1e-3 N), in metres (`unit` = 1) or in
-/// millimetres and MPa (`unit` = 1e3), solved by `method`.
+/// The shared cantilever (shell_common::cantilever_scene) under a tip line
+/// load of 1e-2 N/m (1e-3 N), in metres (`unit` = 1) or in millimetres and
+/// MPa (`unit` = 1e3), solved by `method`.
 fn cantilever(unit: f64, method: &str) -> String {
-    let young = 2e9 / (unit * unit);
-    let q = -1e-2 / unit;
-    let (l, b, t) = (unit, 0.05 * unit, 0.01 * unit);
-    format!(
-        r#"
-[scene]
-kind = "shell"
-
-[mesh]
-type = "rectangle"
-x = [0.0, {l}]
-y = [-{b}, {b}]
-divisions = [20, 2]
-
-[material]
-young = {young}
-poisson = 0.0
-
-[shell]
-thickness = {t}
-
-[[fix]]
-group = "s0"
-clamp = true
-
-[[load]]
-edge = "s1"
-line_force = [0.0, 0.0, {q}]
-
-[[probe]]
-name = "Rz"
-quantity = "reaction_z"
-group = "s0"
-
-[[probe]]
-name = "uz_tip"
-quantity = "uz"
-group = "s1"
-
-[solver]
-method = "{method}"
-lambda_end = 1.0
-
-[output]
-lambda_step = 0.25
-vtk_every = 0
-plot = false
-"#
-    )
+    crate::shell_common::cantilever_scene(unit, -1e-2, method, 1.0, 0.25)
 }
 
 #[test]
