@@ -101,6 +101,8 @@ pub enum Error {
     TimeSteps {
         param: &'static str,
         at: f64,
+        /// The node (0-based) the diagnosis names, if any.
+        node: Option<usize>,
         what: String,
     },
 }
@@ -157,6 +159,16 @@ impl Error {
             | Error::Interrupted { at, .. }
             | Error::ContactMissed { at, .. }
             | Error::TimeSteps { at, .. } => Some(*at),
+            _ => None,
+        }
+    }
+
+    /// The node (0-based) numerical trouble is located at, where the error
+    /// names one.
+    pub fn node(&self) -> Option<usize> {
+        match self {
+            Error::ContactMissed { node, .. } => Some(*node),
+            Error::TimeSteps { node, .. } => *node,
             _ => None,
         }
     }

@@ -456,6 +456,9 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
             if kind == Kind::Shell {
                 let sc = anm::scene::shell::load(&scene)?;
                 anm::run::shell::check_factorizes(&sc)?;
+                if sc.friction.is_some() {
+                    anm::run::shell_time::check_start(&sc)?;
+                }
                 println!(
                     "mesh {}: {} nodes, {} elements",
                     sc.mesh.file.display(),

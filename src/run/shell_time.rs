@@ -139,6 +139,13 @@ pub fn solve(scene: &ShellScene) -> Result<(TimeRun, FrictionDae)> {
     solve_with(scene, false, Keep::No)
 }
 
+/// Step 0 of a friction scene (time_path::check_start), with the same
+/// diagnosis as a run that fails there.
+pub fn check_start(scene: &ShellScene) -> Result<()> {
+    let mut dae = problem(scene)?;
+    time_path::check_start(&mut dae, &config(scene)).map_err(|e| at_rest(scene, e))
+}
+
 /// How [`solve_with`] treats numerical trouble, and where it starts.
 enum Keep {
     /// Any failure is an error; the run starts at rest.
@@ -440,7 +447,12 @@ fn report(
         TimeStop::End => ("end", last.t, None, None),
         TimeStop::Singularity { t, node } => ("singularity", *t, Some(node + 1), None),
         TimeStop::Interrupted { t } => ("interrupted", *t, None, None),
-        TimeStop::Failed { t, kind, message } => (*kind, *t, None, Some(message.clone())),
+        TimeStop::Failed {
+            t,
+            kind,
+            node,
+            message,
+        } => (*kind, *t, node.map(|n| n + 1), Some(message.clone())),
     };
     let mut report = TimeReport {
         scene: scene.file.display().to_string(),

@@ -202,6 +202,7 @@ pub fn load(path: &Path, text: &str, kind: Kind) -> Result<FrictionScene> {
     let q = c.within("friction.q", fr.q, 0.0, 1.0)?;
     let vc = c.positive("friction.Vc", fr.Vc)?;
     let omega = c.positive("friction.omega", fr.omega)?;
+    c.slip_speeds(vc, omega, q)?;
     let zeta = match kind {
         Kind::Friction1d => {
             c.unused("friction.zeta", &fr.zeta, kind)?;

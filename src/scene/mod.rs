@@ -192,6 +192,30 @@ impl Checker<'_> {
         }
     }
 
+    /// The friction law's speeds must stay representable where the law
+    /// squares and raises them (contact::friction): (ω Vc)² and Vc^q in
+    /// f64, else its forces and derivatives are 0 · ∞ at the first step.
+    pub fn slip_speeds(&self, vc: f64, omega: f64, q: f64) -> Result<()> {
+        let w2 = (omega * vc).powi(2);
+        if !w2.is_finite() || (omega > 0.0 && w2 == 0.0) {
+            return Err(self.fail(
+                "friction.Vc",
+                format!(
+                    "omega Vc = {omega:e} × {vc:e} = {:e}: its square is out of the range of a double (about 1e-150 < omega Vc < 1e150 in the scene's length unit per second)",
+                    omega * vc
+                ),
+            ));
+        }
+        let vq = vc.powf(q);
+        if !vq.is_finite() || vq == 0.0 {
+            return Err(self.fail(
+                "friction.Vc",
+                format!("Vc^q = {vc:e}^{q} is out of the range of a double"),
+            ));
+        }
+        Ok(())
+    }
+
     /// A key that this kind of scene does not use must be absent.
     pub fn unused<T>(&self, key: &str, v: &Option<T>, kind: Kind) -> Result<()> {
         match v {

@@ -1551,6 +1551,7 @@ fn friction(
     } else {
         c.non_negative("friction.omega", fr.omega)?
     };
+    c.slip_speeds(vc, omega, q)?;
     let zeta = match fr.zeta {
         Some(z) => Some(c.positive("friction.zeta", z)?),
         None => None,

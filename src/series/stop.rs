@@ -203,9 +203,15 @@ pub fn clone_error(e: &Error) -> Error {
             gap: *gap,
             distance: *distance,
         },
-        Error::TimeSteps { param, at, what } => Error::TimeSteps {
+        Error::TimeSteps {
+            param,
+            at,
+            node,
+            what,
+        } => Error::TimeSteps {
             param,
             at: *at,
+            node: *node,
             what: what.clone(),
         },
     }

@@ -106,6 +106,8 @@ pub enum TimeStop {
     Failed {
         t: f64,
         kind: &'static str,
+        /// The node (0-based) the diagnosis names, if any.
+        node: Option<usize>,
         message: String,
     },
 }
@@ -184,6 +186,15 @@ pub fn at_rest(dae: &FrictionDae) -> TimeState {
     }
 }
 
+/// The run's step 0 alone: the state at rest brought to equilibrium and
+/// the first series at it (what `anm check` tries, so that a scene that
+/// cannot start fails there rather than at run time).
+pub fn check_start(dae: &mut FrictionDae, cfg: &TimeConfig) -> Result<()> {
+    let mut s = at_rest(dae);
+    consistent(dae, &mut s, cfg, &mut TimeStats::default())?;
+    dae.series(&s).map(|_| ())
+}
+
 /// [`run_from`], keeping what was computed when numerical trouble (no
 /// convergence, a collapsed step, the step budget, a singular matrix, a
 /// non-finite value) stops the run after its start: the stop is then
@@ -203,6 +214,7 @@ pub fn run_keeping(
             t: e.at()
                 .unwrap_or_else(|| samples.last().map_or(0.0, |s| s.t)),
             kind: e.kind(),
+            node: e.node(),
             message: e.to_string(),
         },
         Err(e) => return Err(e),
@@ -254,6 +266,7 @@ fn integrate(
                     cfg.t_end,
                     largest_node(dae, &series.u[n_ord]) + 1
                 ),
+                node: Some(largest_node(dae, &series.u[n_ord])),
             });
         }
         let horizon = next_kink(&kinks, s.t, cfg.t_end);
@@ -274,6 +287,7 @@ fn integrate(
                     stats.steps,
                     largest_node(dae, &series.u[n_ord]) + 1
                 ),
+                node: Some(largest_node(dae, &series.u[n_ord])),
             });
         }
         s = series_step(dae, cfg, &series, &s, a, horizon, &mut next_out, samples)?;
@@ -520,6 +534,7 @@ fn run_implicit(
                     stats.rejected,
                     node_of_dof(dae, last_dof) + 1
                 ),
+                node: Some(node_of_dof(dae, last_dof)),
             });
         }
         let target = kinks
@@ -678,6 +693,7 @@ fn run_implicit(
                         stats.steps,
                         node_of_dof(dae, last_dof) + 1
                     ),
+                    node: Some(node_of_dof(dae, last_dof)),
                 });
             }
             if !newton && rejections < 3 {

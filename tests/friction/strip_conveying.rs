@@ -228,7 +228,8 @@ fn conveying_strip_runs_at_omega_1e_5() {
 
 /// Loads full at t = 0 on a shell that starts at rest: when the state at
 /// rest cannot be brought to equilibrium under them, the error names
-/// `friction.load_ramp` (it was a bare "step 0, t = 0: no convergence").
+/// `friction.load_ramp` (it was a bare "step 0, t = 0: no convergence"),
+/// from a run and from `anm check`.
 #[test]
 fn loads_full_at_rest_name_the_load_ramp() {
     let text = std::fs::read_to_string("scenes/strip-conveying.toml")
@@ -253,4 +254,7 @@ fn loads_full_at_rest_name_the_load_ramp() {
     ] {
         assert!(msg.contains(part), "`{msg}` lacks `{part}`");
     }
+    // `anm check` tries step 0 and gives the same diagnosis.
+    let checked = shell_time::check_start(&sc).expect_err("step 0 fails in the check too");
+    assert_eq!(checked.to_string(), msg);
 }

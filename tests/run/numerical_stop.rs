@@ -3,9 +3,9 @@
 //! stops where the strip breaks away, t* = T1 exp(f θ) / T2max, because
 //! the quasi-static solution ceases there. `anm run` used to print the
 //! diagnosis and write no file; it now writes every output up to the stop,
-//! summary.json with the error's kind as `stop`, `stop_t` and
-//! `stop_message`, and exits with 2 (a failure, as a static run's
-//! numerical stop).
+//! summary.json with the error's kind as `stop`, `stop_t`, `stop_message`
+//! and `stop_node` (the node the diagnosis names), and exits with 2 (a
+//! failure, as a static run's numerical stop).
 
 use crate::scratch::scratch;
 use std::path::Path;
@@ -40,6 +40,12 @@ fn a_run_in_time_stopped_by_numerical_trouble_writes_its_outputs() {
     assert_eq!(summary["stop"], "time_steps", "{summary}");
     assert!(message.contains("may cease to exist"), "{message}");
     assert!(stdout.contains(message), "the diagnosis is printed");
+    // The node the diagnosis names is summary.json's stop_node (1-based).
+    let node = summary["stop_node"].as_u64().expect("stop_node") as usize;
+    assert!(
+        message.contains(&format!("node {node} ")),
+        "{node} in {message}"
+    );
     // f = 0.2, θ = π, T1 = 20 N, T2max = 150 N; the coarse arc's
     // discretization puts the stop 2.1e-3 from it.
     let closed = 20.0 * (0.2 * std::f64::consts::PI).exp() / 150.0;

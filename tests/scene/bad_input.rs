@@ -85,6 +85,16 @@ fn negative_friction_coefficient() {
     expect_error(&p, &["friction.f", "must be > 0"]);
 }
 
+/// Speeds whose square leaves the range of a double made the law's
+/// derivatives 0 · ∞ (a NaN backward error at step 0).
+#[test]
+fn slip_speed_out_of_double_range() {
+    for (name, vc) in [("vcbig", "1e300"), ("vcsmall", "1e-300")] {
+        let p = scene_with(|s| s.replace("Vc = 1.0 ", &format!("Vc = {vc} ")), name);
+        expect_error(&p, &["friction.Vc", "out of the range of a double"]);
+    }
+}
+
 #[test]
 fn exponent_outside_unit_interval() {
     for (name, q) in [("qneg", "-0.1"), ("qbig", "1.5")] {

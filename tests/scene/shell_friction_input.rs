@@ -137,6 +137,11 @@ fn bad_friction_values_name_the_key() {
         "at most t_end",
     );
     expect_invalid(
+        &scene("vc-huge.toml", &[("Vc = 0.1", "Vc = 1e300")]),
+        "friction.Vc",
+        "out of the range of a double",
+    );
+    expect_invalid(
         &scene("q.toml", &[("q = 0.0", "q = 1.5")]),
         "friction.q",
         "[0, 1]",
