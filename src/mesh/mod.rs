@@ -88,13 +88,20 @@ impl Grid {
     }
 
     /// The cross-section at node row j: on each side that has elements
-    /// (row j − 1 below, row j above), every element node on the row with
-    /// its neighbour across the side (same i, the next row away).
-    pub fn cut(&self, j: usize, quads: &[[usize; 4]]) -> Cut {
+    /// (row j − 1 below, row j above) and that `side` keeps, every element
+    /// node on the row with its neighbour across the side (same i, the next
+    /// row away).
+    pub fn cut(&self, j: usize, quads: &[[usize; 4]], side: CutSide) -> Cut {
         let mut sides = Vec::new();
         let stride = self.nx + 1;
-        for (rows, away) in [(j.checked_sub(1), -1i64), ((j < self.ny).then_some(j), 1)] {
+        for (rows, away, which) in [
+            (j.checked_sub(1), -1i64, CutSide::Before),
+            ((j < self.ny).then_some(j), 1, CutSide::After),
+        ] {
             let Some(je) = rows else { continue };
+            if side != CutSide::Both && side != which {
+                continue;
+            }
             let mut side = Vec::new();
             for i in 0..self.nx {
                 let e = self.element(i, je);
@@ -114,6 +121,19 @@ impl Grid {
         }
         Cut { row: j, sides }
     }
+}
+
+/// Which elements of a cross-section carry its force: the mean of the
+/// two sides, or one side alone (the external forces at the row's nodes,
+/// e.g. friction at a roller's tangent row, then count wholly on the
+/// other side).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CutSide {
+    Both,
+    /// The elements at lower t (upstream along a strip).
+    Before,
+    /// The elements at higher t (downstream along a strip).
+    After,
 }
 
 /// A cross-section of a structured mesh (a node row) as the element nodes

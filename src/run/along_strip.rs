@@ -5,7 +5,7 @@
 
 use super::section::{MembraneStress, membrane_stress, tension};
 use crate::error::{Error, Result};
-use crate::mesh::{Grid, Vec3};
+use crate::mesh::{CutSide, Grid, Vec3};
 use crate::output::plot::{Curve, Panel, draw};
 use crate::shell::ShellModel;
 use crate::shell::time_path::NodeFriction;
@@ -123,7 +123,7 @@ pub fn rows(
         let area: f64 = sides.iter().map(|&je| 0.5 * element_area[je]).sum();
         out.push(AlongRow {
             s,
-            tension: tension(model, &grid.cut(j, quads), full),
+            tension: tension(model, &grid.cut(j, quads, CutSide::Both), full),
             pressure: rn[j] / area,
             slip_speed: slip[j],
             slip_nodes: slipping[j],

@@ -13,7 +13,7 @@ use crate::contact::{FrictionLaw, Motion, Obstacle};
 use crate::error::Result;
 use crate::fe::dof::{Component, Dof};
 use crate::linalg::{Backend, Choice};
-use crate::mesh::{Mesh, Vec3, gmsh, strip_path, structured};
+use crate::mesh::{CutSide, Mesh, Vec3, gmsh, strip_path, structured};
 use crate::series::ContinuationConfig;
 use crate::series::newton::{Control, NewtonConfig};
 use crate::shell::Material;
@@ -212,6 +212,7 @@ struct RawProbe {
     point: Option<[f64; 3]>,
     group: Option<String>,
     obstacle: Option<String>,
+    side: Option<String>,
 }
 
 #[derive(Deserialize)]
@@ -1771,6 +1772,12 @@ fn probes(
                 )
             })?),
         };
+        if p.side.is_some() && q != "tension" {
+            return Err(c.fail(
+                &format!("{key}.side"),
+                format!("not used by a `{q}` probe (only by `tension`)"),
+            ));
+        }
         let is_contact = q.starts_with("contact") || q == "min_gap";
         if obstacle.is_some() && !is_contact {
             return Err(c.fail(
@@ -1867,12 +1874,32 @@ fn probes(
             let row = grid.row_of(&nodes).ok_or_else(|| {
                 c.fail(&key, "`tension` needs a group that is one node row of constant t (t0, t1, a strip's <roller>_in or <roller>_out, or a [[group]] box around one row)")
             })?;
-            (
-                Quantity::Tension {
-                    cut: grid.cut(row, &ctx.mesh.quads),
-                },
-                "N",
-            )
+            let side = match p.side.as_deref() {
+                None | Some("both") => CutSide::Both,
+                Some("before") => CutSide::Before,
+                Some("after") => CutSide::After,
+                Some(other) => {
+                    return Err(c.fail(
+                        &format!("{key}.side"),
+                        format!("expected \"both\", \"before\" or \"after\", got \"{other}\""),
+                    ));
+                }
+            };
+            let cut = grid.cut(row, &ctx.mesh.quads, side);
+            if cut.sides.is_empty() {
+                return Err(c.fail(
+                    &format!("{key}.side"),
+                    format!(
+                        "node row {row} is an end of the mesh: it has no elements {} it",
+                        if side == CutSide::Before {
+                            "before"
+                        } else {
+                            "after"
+                        }
+                    ),
+                ));
+            }
+            (Quantity::Tension { cut }, "N")
         } else {
             return Err(c.fail(
                 &format!("{key}.quantity"),

@@ -97,6 +97,22 @@ fn conveying_strip_reaches_the_euler_eytelwein_steady_state() {
         println!("{r}: in {a:.3} N, out {b:.3} N ({:.1e})", (a - b) / a);
         assert!((a - b).abs() < 1e-3 * a, "{r}: {a} vs {b}");
     }
+    // Roller 2's free spans (`side` probes at its tangent rows): the entry
+    // span carries T_in, the exit span T_in exp(−f g θ2); the cuts that
+    // average the span with the first arc element read between the two.
+    let (span_in, span_out) = (last[col("T_r2_in_span")], last[col("T_r2_out_span")]);
+    let (mean_in, mean_out) = (last[col("T_r2_in")], last[col("T_r2_out")]);
+    let ratio = span_out / span_in;
+    let closed_ratio = (-law.f * g * FRAC_PI_2).exp();
+    println!(
+        "roller 2 spans: in {span_in:.4} N ({:.1e} from T_in), out {span_out:.4} N; ratio {ratio:.6} vs exp(−f g θ2) = {closed_ratio:.6} ({:.1e}); two-sided cuts: in {mean_in:.4} N, out {mean_out:.4} N, ratio {:.6} ({:.1e})",
+        span_in / t_in - 1.0,
+        ratio / closed_ratio - 1.0,
+        mean_out / mean_in,
+        mean_out / mean_in / closed_ratio - 1.0
+    );
+    assert!((span_in / t_in - 1.0).abs() < 1e-3, "{span_in}");
+    assert!((ratio / closed_ratio - 1.0).abs() < 2e-3, "{ratio}");
 
     // The tension along roller 2's arc and the slip map.
     let (run, dae) = shell_time::solve(&sc).expect("runs");

@@ -159,6 +159,39 @@ fn a_tension_probe_needs_a_cross_section() {
     expect_invalid(&p, "probe[1]", "one node row of constant t");
 }
 
+/// `probe.side`: one of three words, only on a `tension` probe, and a side
+/// that has elements (t1 is the strip's last row).
+#[test]
+fn a_tension_probe_side_is_checked() {
+    let p = scene(
+        "side-word.toml",
+        &[("side = \"before\"", "side = \"upstream\"")],
+    );
+    expect_invalid(&p, "probe[5].side", "\"both\", \"before\" or \"after\"");
+    let p = scene(
+        "side-at-end.toml",
+        &[(
+            "quantity = \"tension\"\ngroup = \"t1\"",
+            "quantity = \"tension\"\ngroup = \"t1\"\nside = \"after\"",
+        )],
+    );
+    expect_invalid(&p, "probe[0].side", "no elements after it");
+    let p = scene(
+        "side-on-uy.toml",
+        &[("quantity = \"uy\"", "quantity = \"uy\"\nside = \"before\"")],
+    );
+    expect_invalid(&p, ".side", "only by `tension`");
+    // The end row's one side, named, is accepted.
+    let p = scene(
+        "side-end-ok.toml",
+        &[(
+            "quantity = \"tension\"\ngroup = \"t1\"",
+            "quantity = \"tension\"\ngroup = \"t1\"\nside = \"before\"",
+        )],
+    );
+    anm::scene::shell::load(&p).expect("t1 has elements before it");
+}
+
 /// `anm check` shows what the strip mesher worked out: the path's length
 /// and each roller's wrap angle.
 #[test]
