@@ -34,9 +34,19 @@ enum Command {
         /// No progress bar.
         #[arg(long)]
         quiet: bool,
+        /// Run a shell scene even when its mesh needs more memory than the
+        /// machine has (by the measured figures of `anm check`).
+        #[arg(long)]
+        ignore_memory: bool,
     },
     /// Read and validate a scene without solving it.
-    Check { scene: PathBuf },
+    Check {
+        scene: PathBuf,
+        /// Check a shell scene even when its mesh needs more memory than
+        /// the machine has.
+        #[arg(long)]
+        ignore_memory: bool,
+    },
     /// Linearized buckling of a shell scene (Abaqus *BUCKLE): the lowest
     /// eigenvalues mu and modes of (K_0 + mu K_sigma) about the state at
     /// --lambda (path followed by the ANM) or the initial state; the
@@ -451,10 +461,14 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
             println!("{}", serde_json::to_string(&report)?);
             Ok(ExitCode::SUCCESS)
         }
-        Command::Check { scene } => {
+        Command::Check {
+            scene,
+            ignore_memory,
+        } => {
             let (kind, _) = load(&scene)?;
             if kind == Kind::Shell {
                 let sc = anm::scene::shell::load(&scene)?;
+                fits_in_memory(&sc, ignore_memory)?;
                 anm::run::shell::check_factorizes(&sc)?;
                 if sc.friction.is_some() {
                     anm::run::shell_time::check_start(&sc)?;
@@ -798,6 +812,7 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
             out,
             resume,
             quiet,
+            ignore_memory,
         } => {
             if let Some(dir) = resume {
                 anm::run::interrupt::install();
@@ -817,6 +832,7 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
             match kind {
                 Kind::Shell => {
                     let sc = anm::scene::shell::load(&scene)?;
+                    fits_in_memory(&sc, ignore_memory)?;
                     if sc.friction.is_some() {
                         for w in &sc.warnings {
                             eprintln!("warning: {w}");
@@ -1099,6 +1115,18 @@ fn time_summary(r: &anm::run::shell_time::TimeReport, out: &std::path::Path) -> 
         "interrupted" => ExitCode::from(130),
         _ => ExitCode::from(2),
     }
+}
+
+/// A shell scene whose mesh cannot fit in this machine's memory is refused
+/// before anything is built (run::memory); a warning where it may not fit.
+fn fits_in_memory(sc: &anm::scene::shell::ShellScene, ignore: bool) -> anyhow::Result<()> {
+    if ignore {
+        return Ok(());
+    }
+    if let Some(w) = anm::run::memory::check(sc, anm::run::memory::available())? {
+        eprintln!("warning: {w}");
+    }
+    Ok(())
 }
 
 /// Removes an earlier run's files from the output directory of a new run

@@ -5,7 +5,8 @@
 //! - [`recorder`]: the output grid, the streamed CSV files, VTK, the
 //!   checkpoint that `anm run --resume` continues from;
 //! - [`shell`]: the run loop (ANM stepper, Newton baseline, linear solve);
-//! - [`shell_time`]: a shell scene with `[friction]`, integrated in time.
+//! - [`shell_time`]: a shell scene with `[friction]`, integrated in time;
+//! - [`memory`]: a mesh too large for the machine refused before the run.
 //!
 //! A run stops at the next step end after Ctrl-C or SIGTERM
 //! ([`interrupt`]), with every file consistent with the last step.
@@ -13,6 +14,7 @@
 pub mod along_strip;
 pub mod build;
 pub mod interrupt;
+pub mod memory;
 pub mod probe;
 pub mod recorder;
 pub mod section;

@@ -6,6 +6,7 @@ mod built_in_mesh_input;
 mod docs;
 mod edited;
 mod fuzz;
+mod memory_gate;
 #[path = "../common/scratch.rs"]
 #[allow(dead_code)]
 mod scratch;
