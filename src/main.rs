@@ -828,6 +828,7 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
             let (Some(scene), Some(out)) = (scene, out) else {
                 anyhow::bail!("`anm run` needs SCENE and -o DIR (or --resume DIR)");
             };
+            anm::output::folder_or_absent(&out)?;
             let (kind, friction) = load(&scene)?;
             match kind {
                 Kind::Shell => {

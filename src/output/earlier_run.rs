@@ -89,6 +89,7 @@ fn remove_where(dir: &Path, named: fn(&str) -> bool) -> Result<Vec<PathBuf>> {
         let file = file.to_path_buf();
         move |source| Error::Io { file, source }
     };
+    super::folder_or_absent(dir)?;
     let entries = match std::fs::read_dir(dir) {
         Ok(entries) => entries,
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(vec![]),

@@ -93,12 +93,26 @@ pub fn peak_rss_bytes() -> Option<u64> {
     Some(kb * 1024)
 }
 
+/// An output folder that exists or can be made: neither it nor a folder
+/// above it is a file.
+pub fn folder_or_absent(dir: &Path) -> Result<()> {
+    match dir.ancestors().find(|a| a.is_file()) {
+        Some(file) => Err(Error::write(
+            dir,
+            format!(
+                "{} is a file, not a folder (-o names the folder the outputs go to)",
+                file.display()
+            ),
+        )),
+        None => Ok(()),
+    }
+}
+
 /// Creates the output directory (and parents).
 pub fn create_dir(dir: &Path) -> Result<()> {
-    std::fs::create_dir_all(dir).map_err(|e| Error::Io {
-        file: dir.to_path_buf(),
-        source: e,
-    })
+    folder_or_absent(dir)?;
+    std::fs::create_dir_all(dir)
+        .map_err(|e| Error::write(dir, format!("cannot create the folder: {e}")))
 }
 
 /// Why and where a run stopped (summary.json `stop`).

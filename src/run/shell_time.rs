@@ -235,7 +235,8 @@ fn row(dae: &FrictionDae, scene: &ShellScene, areas: &[f64], s: &TimeSample) -> 
         .iter()
         .filter(|f| f.slip.norm() > slip_threshold(&law))
         .map(|f| areas[f.node])
-        .sum();
+        // fold from +0: an empty f64 sum is −0, printed "-0.0".
+        .fold(0.0, |a, x| a + x);
     v.extend([rn, ft[0], ft[1], ft[2], slip, slip_area]);
     Ok(v)
 }

@@ -102,13 +102,22 @@ fn parse_error(path: &Path, text: &str, e: toml::de::Error) -> Error {
     }
 }
 
-/// The dotted key (`table.key`) whose line contains byte offset `at`.
+/// The dotted key (`table.key`) whose line contains byte offset `at`: the
+/// n-th table of an array of tables as `name[n]` (0-based, as the
+/// validation errors name it), and inside an inline table the key that
+/// holds `at` (`obstacle[0].motion.omega`).
 fn key_at(text: &str, at: usize) -> Option<String> {
     let mut table = String::new();
+    let mut arrays: std::collections::HashMap<String, usize> = Default::default();
     let mut offset = 0;
     for line in text.split_inclusive('\n') {
         let trimmed = line.trim();
-        if trimmed.starts_with('[') {
+        if trimmed.starts_with("[[") {
+            let name = trimmed.trim_matches(|c| c == '[' || c == ']').trim();
+            let n = arrays.entry(name.to_string()).or_insert(0);
+            table = format!("{name}[{n}]");
+            *n += 1;
+        } else if trimmed.starts_with('[') {
             table = trimmed
                 .trim_matches(|c| c == '[' || c == ']')
                 .trim()
@@ -118,19 +127,77 @@ fn key_at(text: &str, at: usize) -> Option<String> {
             if trimmed.starts_with('[') {
                 return Some(table);
             }
-            let key = trimmed.split('=').next()?.trim();
-            if key.is_empty() || trimmed.starts_with('#') {
+            if trimmed.starts_with('#') {
+                return None;
+            }
+            let path = inline_key_path(line, (at - offset).min(line.len()));
+            if path.is_empty() {
                 return None;
             }
             return Some(if table.is_empty() {
-                key.to_string()
+                path
             } else {
-                format!("{table}.{key}")
+                format!("{table}.{path}")
             });
         }
         offset += line.len();
     }
     None
+}
+
+/// The keys, outermost first and joined by dots, that byte `at` of `line`
+/// (a line of TOML) lies under: in `motion = { omega = "fast" }` the value
+/// is under `motion.omega`, and so is the key `omega` itself; in
+/// `x = [1.0, "y"]` the "y" is under `x`.
+fn inline_key_path(line: &str, at: usize) -> String {
+    let prefix = &line[..at];
+    let mut keys: Vec<String> = vec![];
+    let mut current: Option<String> = None;
+    let mut start = 0;
+    let mut quote: Option<char> = None;
+    // Inside an array the position is under the array's key.
+    let mut in_array = 0usize;
+    for (i, c) in prefix.char_indices() {
+        if let Some(q) = quote {
+            if c == q {
+                quote = None;
+            }
+            continue;
+        }
+        match c {
+            '"' | '\'' => quote = Some(c),
+            '[' => in_array += 1,
+            ']' => in_array = in_array.saturating_sub(1),
+            _ if in_array > 0 => {}
+            '=' if current.is_none() => {
+                current = Some(prefix[start..i].trim().to_string());
+            }
+            '{' => {
+                keys.extend(current.take());
+                start = i + 1;
+            }
+            '}' => {
+                keys.pop();
+                current = None;
+                start = i + 1;
+            }
+            ',' => {
+                current = None;
+                start = i + 1;
+            }
+            _ => {}
+        }
+    }
+    // At a key (not yet followed by `=`): that key.
+    let at_key = || {
+        line[start..]
+            .split('=')
+            .next()
+            .map(|k| k.trim().to_string())
+    };
+    keys.extend(current.or_else(at_key));
+    keys.retain(|k| !k.is_empty());
+    keys.join(".")
 }
 
 /// Resolves a path written in a scene relative to the scene file's folder.
@@ -234,5 +301,40 @@ impl Checker<'_> {
                 format!("missing: required by a `{}` scene", kind.name()),
             )
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::key_at;
+
+    /// The key of the byte where `needle` starts in `text`.
+    fn key_of(text: &str, needle: &str) -> Option<String> {
+        key_at(text, text.find(needle).expect("needle"))
+    }
+
+    #[test]
+    fn parse_errors_name_the_key_inside_inline_tables_and_arrays_of_tables() {
+        let text = "[scene]\nkind = \"shell\"\n\n[[obstacle]]\nname = \"a\"\n\n[[obstacle]]\nname = \"b\"\nmotion = { type = \"rotate\", omega = \"fast\" }\nx = [1.0, \"y\"]\n\n[solver]\n# eps = 1\norder = \"ten\"\n";
+        assert_eq!(
+            key_of(text, "\"fast\"").as_deref(),
+            Some("obstacle[1].motion.omega")
+        );
+        assert_eq!(
+            key_of(text, "\"rotate\"").as_deref(),
+            Some("obstacle[1].motion.type")
+        );
+        assert_eq!(key_of(text, "\"y\"").as_deref(), Some("obstacle[1].x"));
+        assert_eq!(key_of(text, "\"b\"").as_deref(), Some("obstacle[1].name"));
+        assert_eq!(key_of(text, "\"a\"").as_deref(), Some("obstacle[0].name"));
+        assert_eq!(key_of(text, "\"ten\"").as_deref(), Some("solver.order"));
+        assert_eq!(key_of(text, "\"shell\"").as_deref(), Some("scene.kind"));
+        assert_eq!(key_of(text, "# eps"), None);
+        // Unknown-field errors point at the key itself.
+        assert_eq!(
+            key_of(text, "omega =").as_deref(),
+            Some("obstacle[1].motion.omega")
+        );
+        assert_eq!(key_of(text, "order =").as_deref(), Some("solver.order"));
     }
 }

@@ -234,3 +234,27 @@ fn time_rejects_anm_methods_outside_the_scene_bounds() {
         );
     }
 }
+
+/// `-o` naming a file (or a path under one): an error that says so, the
+/// file untouched ("cannot read: Not a directory" before).
+#[test]
+fn output_folder_that_is_a_file() {
+    let p = scene_with(|s| s.to_string(), "outfile");
+    let file = p.with_extension("txt");
+    std::fs::write(&file, "keep").unwrap();
+    for out in [file.clone(), file.join("sub")] {
+        let o = Command::new(env!("CARGO_BIN_EXE_anm"))
+            .arg("run")
+            .arg(&*p)
+            .arg("-o")
+            .arg(&out)
+            .arg("--quiet")
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        println!("{err}");
+        assert_eq!(o.status.code(), Some(1), "{err}");
+        assert!(err.contains("is a file, not a folder"), "{err}");
+    }
+    assert_eq!(std::fs::read_to_string(&file).unwrap(), "keep");
+}
