@@ -206,7 +206,8 @@ pub fn path(
             if !(wrap > 1e-9 && wrap < TAU - 1e-9) {
                 return Err(format!(
                     "the strip does not wrap {name} (wrap angle {:.3e} degrees): check `turn` and the positions",
-                    wrap.to_degrees()
+                    // + 0: rem_euclid keeps the sign of a −0 turn.
+                    wrap.to_degrees() + 0.0
                 ));
             }
             let p_in = lines[k - 1].2;
