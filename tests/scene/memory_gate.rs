@@ -38,16 +38,16 @@ fn the_estimate_follows_the_measured_figures() {
     assert_eq!(check(&sc, None).expect("unknown memory"), None);
 }
 
-/// Under `ulimit -v` 4 GB, a 400 × 400 plate (964,806 unknowns, at least
-/// 4.8 GB by the lower bound) stops at once with exit 1; `anm check` did
+/// Under `ulimit -v` 4 GB, a 500 × 500 plate (1,506,006 unknowns, at least
+/// 6.0 GB by the lower bound) stops at once with exit 1; `anm check` did
 /// not finish such meshes in 30 s.
 #[test]
 fn a_mesh_beyond_the_address_space_limit_is_refused_before_the_build() {
     let p = edited(
         PLATE,
         "memory-gate",
-        "plate-400.toml",
-        &[("divisions = [16, 16]", "divisions = [400, 400]")],
+        "plate-500.toml",
+        &[("divisions = [16, 16]", "divisions = [500, 500]")],
     );
     for cmd in ["check", "run"] {
         let out = p.with_extension("out");
@@ -66,7 +66,7 @@ fn a_mesh_beyond_the_address_space_limit_is_refused_before_the_build() {
         println!("{cmd}: {:?}, {err}", o.status);
         assert_eq!(o.status.code(), Some(1), "{err}");
         assert!(
-            err.contains("plate-400.toml") && err.contains("ulimit -v"),
+            err.contains("plate-500.toml") && err.contains("ulimit -v"),
             "{err}"
         );
         assert!(!out.exists(), "no output for a refused scene");
