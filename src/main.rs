@@ -482,6 +482,10 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
                 for note in &sc.mesh.notes {
                     println!("  {note}");
                 }
+                println!(
+                    "  {}",
+                    anm::run::memory::summary(&sc, anm::run::memory::available())
+                );
                 for w in &sc.warnings {
                     eprintln!("warning: {w}");
                 }

@@ -114,3 +114,17 @@ pub fn check(scene: &ShellScene, available: Option<(f64, &str)>) -> Result<Optio
         )
     }))
 }
+
+/// One line for `anm check`: the expected peak against what is available.
+pub fn summary(scene: &ShellScene, available: Option<(f64, &str)>) -> String {
+    let e = estimate(scene);
+    let have = available.map_or(String::new(), |(bytes, source)| {
+        format!("; {:.1} GiB of {source}", bytes / GIB)
+    });
+    format!(
+        "memory: {} unknowns, a run typically needs {:.2} GiB (at least {:.2}){have}",
+        e.unknowns,
+        e.typical / GIB,
+        e.low / GIB
+    )
+}
