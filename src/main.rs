@@ -469,9 +469,13 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
             if kind == Kind::Shell {
                 let sc = anm::scene::shell::load(&scene)?;
                 fits_in_memory(&sc, ignore_memory)?;
-                anm::run::shell::check_factorizes(&sc)?;
+                // A run in time starts from its own tangent (with friction),
+                // so its step 0 is the check; the static one would build the
+                // model a second time for a matrix the run never factors.
                 if sc.friction.is_some() {
                     anm::run::shell_time::check_start(&sc)?;
+                } else {
+                    anm::run::shell::check_factorizes(&sc)?;
                 }
                 println!(
                     "mesh {}: {} nodes, {} elements",
