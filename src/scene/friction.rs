@@ -23,6 +23,8 @@ use std::path::{Path, PathBuf};
 /// Accepted `solver.order` of a friction scene (and of `anm time`/`bench`
 /// methods `anm:ORDER:EPS`).
 pub const ORDERS: std::ops::RangeInclusive<usize> = 2..=200;
+/// Default `solver.min_step`, relative to `solver.t_end`.
+pub const DEFAULT_MIN_STEP: f64 = 1e-13;
 /// Accepted `solver.eps` of a friction scene (and of those methods).
 pub const EPS: std::ops::RangeInclusive<f64> = 1e-16..=1.0;
 
@@ -339,7 +341,14 @@ pub fn load(path: &Path, text: &str, kind: Kind) -> Result<FrictionScene> {
         Some(m) => m as usize,
         None => 100_000,
     };
-    let min_step = c.positive("solver.min_step", s.min_step.unwrap_or(1e-9 * t_end))?;
+    // Default: a few hundred round-offs of t_end (IDA's floor is the
+    // round-off of t). At 1e-9 t_end the explicit steps of legitimate fast
+    // transients (zeta = 1e-6 N, order 10: 2.5e-9 s at t_end = 3 s) were
+    // called a collapse; README "False singular points".
+    let min_step = c.positive(
+        "solver.min_step",
+        s.min_step.unwrap_or(DEFAULT_MIN_STEP * t_end),
+    )?;
     let newton_tol = c.positive("solver.newton_tol", s.newton_tol.unwrap_or(1e-14))?;
     let residual_tol = c.positive("solver.residual_tol", s.residual_tol.unwrap_or(1e-8))?;
     let stop_at_singularity = match s.on_singularity.as_deref() {
