@@ -819,12 +819,37 @@ fn solve_series<P: DaeProblem + ?Sized>(
                 step: index,
                 param: "t",
                 at: t0,
-                what: format!("series term of order {p}"),
+                what: overflow_diagnosis(eng, p),
             });
         }
     }
     charge(&mut eng.stats.series_s, start);
     Ok(())
+}
+
+/// What a non-finite series term of order p means. The terms of a series
+/// whose radius in time is r grow like r^-p: where a fast time constant
+/// makes r small (zeta = 1e-6 N, omega = 1e-4: the terms pass 1e170 at
+/// order 26 at t = 0, and their squares overflow) they leave the range of a
+/// double before the last order, and only a lower order runs.
+fn overflow_diagnosis<P: DaeProblem + ?Sized>(eng: &Engine<P>, p: usize) -> String {
+    let what = format!("series term of order {p}");
+    if p < 3 {
+        return what;
+    }
+    let last = (0..eng.nd + eng.n())
+        .map(|i| eng.tape.input_series(i)[p - 1].abs())
+        .fold(0.0, f64::max);
+    // Products of two such terms (squares in the laws) overflow once the
+    // terms pass the square root of the largest double.
+    if !(last.is_finite() && last > 1e100) {
+        return what;
+    }
+    format!(
+        "{what}: the terms outgrow the range of a double (order {}: {last:.1e}; they grow like r^-p with r = {:.1e} s, the series' reach in time, set by a fast time constant); set solver.order below {p}",
+        p - 1,
+        last.powf(-1.0 / (p - 1) as f64)
+    )
 }
 
 /// The inputs' series (u, v, z) on the tape into `out`, reusing its vectors
