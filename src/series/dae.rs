@@ -869,7 +869,20 @@ fn copy_series<P: DaeProblem + ?Sized>(eng: &Engine<P>, out: &mut Vec<Vec<f64>>)
 /// Ratio rule a = (eps |y_1| / |y_N|)^(1/(N-1)) on y = (u, v, z), capped at
 /// (1e15)^(1/N) (DESIGN §2).
 fn ratio_length(series: &[Vec<f64>], eps: f64, n_ord: usize) -> f64 {
-    let term_norm = |p: usize| series.iter().map(|c| c[p] * c[p]).sum::<f64>().sqrt();
+    let term_norm = |p: usize| {
+        let s = series.iter().map(|c| c[p] * c[p]).sum::<f64>();
+        if s.is_finite() {
+            return s.sqrt();
+        }
+        // Terms past 1e154 (a fast time constant, a high order): their
+        // squares overflow, which made the length 0 and the step a collapse.
+        let m = series.iter().fold(0.0f64, |m, c| m.max(c[p].abs()));
+        m * series
+            .iter()
+            .map(|c| (c[p] / m).powi(2))
+            .sum::<f64>()
+            .sqrt()
+    };
     let (n1, nn) = (term_norm(1), term_norm(n_ord));
     let cap = 1e15f64.powf(1.0 / n_ord as f64);
     if nn > 0.0 && n1 > 0.0 {
