@@ -211,7 +211,7 @@ enum Command {
         #[arg(long, default_value_t = 20000)]
         max_steps: usize,
         /// Write stress.md, stress.csv and every run's result as
-        /// DIR/items/K.json.
+        /// DIR/items/K.json (required, except with --list-items).
         #[arg(
             short,
             long,

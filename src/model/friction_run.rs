@@ -136,6 +136,26 @@ pub fn run(scene: &FrictionScene, out_dir: Option<&Path>, progress: bool) -> Res
         stepping: scene.stepping,
         output_times: scene.output_times(),
     };
+    if let Initialization::Exact { .. } = &init {
+        // "exact" values are checked before anything is written: a wrong
+        // v0 ran to the end with every row off equilibrium (review 3, D1).
+        let none = DaeConfig {
+            max_steps: 0,
+            output_times: vec![],
+            ..cfg.clone()
+        };
+        let r0 = dae::run(model, &model.u0(), &init, &none, |_, _| Ok(())).initial_residual;
+        if !(r0 <= scene.residual_tol) {
+            return Err(crate::Error::Invalid {
+                file: scene.file.clone(),
+                key: "initial.v0".into(),
+                problem: format!(
+                    "initial.mode = \"exact\" but the initial values leave a residual of {r0:.3e} (solver.residual_tol = {:.1e}): give the exact v0, or use mode = \"newton\"",
+                    scene.residual_tol
+                ),
+            });
+        }
+    }
     let grid = scene.output_times();
     let mut next = 0;
     let mut history = Vec::with_capacity(grid.len());

@@ -349,6 +349,12 @@ pub fn load(path: &Path, text: &str, kind: Kind) -> Result<FrictionScene> {
         "solver.min_step",
         s.min_step.unwrap_or(DEFAULT_MIN_STEP * t_end),
     )?;
+    if min_step >= t_end {
+        return Err(c.fail(
+            "solver.min_step",
+            format!("must be below solver.t_end = {t_end}, got {min_step}"),
+        ));
+    }
     let newton_tol = c.positive("solver.newton_tol", s.newton_tol.unwrap_or(1e-14))?;
     let residual_tol = c.positive("solver.residual_tol", s.residual_tol.unwrap_or(1e-8))?;
     let stop_at_singularity = match s.on_singularity.as_deref() {

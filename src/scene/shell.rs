@@ -679,7 +679,14 @@ pub fn load(path: &Path) -> Result<ShellScene> {
     if let Some(ct) = &contact {
         warnings.extend(out_of_reach(path, &obstacles, ct, &mesh.nodes));
     }
-    let probes = probes(&ctx, &raw.probe, &fixed, &obstacles, contact.is_some())?;
+    let probes = probes(
+        &ctx,
+        &raw.probe,
+        &fixed,
+        &obstacles,
+        contact.is_some(),
+        friction.is_some(),
+    )?;
     let (method, solver, length_scale) = solver(&c, &raw.solver, size)?;
     if friction.is_some() && !matches!(method, Method::Anm) {
         return Err(c.fail(
@@ -1733,18 +1740,47 @@ pub const DEFAULT_CONTACT_ARCLENGTH: f64 = 1.0;
 /// The probe quantities, for error messages and docs.
 pub const QUANTITIES: &str = "ux, uy, uz, wx, wy, wz, x, y, z, reaction_x, reaction_y, reaction_z, contact_rn, contact_x, contact_y, contact_z, min_gap, contacts, lambda, arclength, tension";
 
+/// The columns of history.csv that a run in time (a scene with
+/// `[friction]`) writes besides the probes (run::shell_time): a probe of the
+/// same name made two columns of one name, and summary.json's `end` kept
+/// one of them.
+const TIME_COLUMNS: [&str; 12] = [
+    "t",
+    "rn_total",
+    "ft_x",
+    "ft_y",
+    "ft_z",
+    "max_slip",
+    "slip_area",
+    "negative_pivots",
+    "lowest_eigenvalue",
+    "negative_pivots_tied",
+    "lowest_eigenvalue_tied",
+    "sticking_nodes",
+];
+
 fn probes(
     ctx: &Ctx,
     raw: &[RawProbe],
     fixed: &BTreeMap<Dof, f64>,
     obstacles: &[ObstacleSpec],
     has_contact: bool,
+    in_time: bool,
 ) -> Result<Vec<Probe>> {
     let c = &ctx.c;
     let mut out: Vec<Probe> = vec![];
     for (i, p) in raw.iter().enumerate() {
         let key = format!("probe[{i}]");
         let name = p.name.trim();
+        if in_time && TIME_COLUMNS.contains(&name) {
+            return Err(c.fail(
+                &format!("{key}.name"),
+                format!(
+                    "`{name}` is a column that a run in time writes itself ({}): choose another name",
+                    TIME_COLUMNS.join(", ")
+                ),
+            ));
+        }
         if name.is_empty()
             || name.contains([',', '"', '\n'])
             || name == "lambda"

@@ -491,3 +491,21 @@ fn implicit_end_off_the_slow_manifold_is_refused() {
         "roller zeta = 1e-6, omega = 1e-4, order 20",
     );
 }
+
+/// `initial.mode = "exact"` checks its values before the run (review 3,
+/// D1): friction-1d with v0 = 0 (the exact value is V = 1) ran to its end
+/// with every row 0.199 N off equilibrium; it is now refused, naming
+/// `initial.v0`, and the exact v0 runs.
+#[test]
+fn exact_initial_values_are_checked() {
+    let wrong = friction_scene("friction-1d.toml", &[("initial.mode", "\"exact\"")]);
+    let e = anm_run(&wrong, None, false).expect_err("an inexact v0 must be refused");
+    let message = e.to_string();
+    assert!(message.contains("initial.v0"), "{message}");
+    let right = friction_scene(
+        "friction-1d.toml",
+        &[("initial.mode", "\"exact\""), ("initial.v0", "1.0")],
+    );
+    let a = anm_run(&right, None, false).unwrap_or_else(|e| panic!("ANM failed: {e}"));
+    assert_eq!(a.stop.reason, "end", "{:?}", a.stop);
+}

@@ -117,6 +117,17 @@ fn end_time_not_positive() {
     }
 }
 
+/// A step floor at or above the end time (review 3, D7: min_step = 10 s
+/// with t_end = 3 s stopped at t = 0 "at a singularity").
+#[test]
+fn min_step_not_below_end_time() {
+    let p = scene_with(
+        |s| s.replace("t_end = 3.0", "t_end = 3.0\nmin_step = 10.0"),
+        "minstep",
+    );
+    expect_error(&p, &["solver.min_step", "below solver.t_end"]);
+}
+
 #[test]
 fn unknown_kind_and_missing_section() {
     let p = scene_with(

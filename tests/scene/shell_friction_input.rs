@@ -369,3 +369,20 @@ fn an_obstacle_out_of_reach_of_every_contact_node_is_a_warning() {
         s.warnings
     );
 }
+
+/// A probe named like a column that a run in time writes itself (`t`,
+/// `slip_area`, …) is refused, naming the key: it made two columns of one
+/// name in history.csv, and summary.json's `end.t` held the probe's value
+/// (review 3, D2). Without [friction] such names stay free (plate-cylinder
+/// probes `rn_total`).
+#[test]
+fn a_probe_named_like_a_time_column_is_refused() {
+    for name in ["t", "slip_area", "rn_total", "negative_pivots"] {
+        let p = scene(
+            &format!("probe-{name}.toml"),
+            &[("name = \"w_tip\"", &format!("name = \"{name}\""))],
+        );
+        expect_invalid(&p, "probe[0].name", "a run in time writes itself");
+    }
+    assert!(load(Path::new("scenes/plate-cylinder-coarse.toml")).is_ok());
+}
