@@ -27,7 +27,7 @@ use crate::error::{Error, Result};
 use crate::output::mode;
 use crate::output::plot::{Curve, Panel, draw};
 use crate::output::vtk::{PointData, write_vtu_cells};
-use crate::scene::shell::ShellScene;
+use crate::scene::shell::{ShellScene, TIME_FORCE_COLUMNS, TIME_STABILITY_COLUMNS};
 use crate::series::ContinuationProblem;
 use crate::shell::friction_dae::{FrictionDae, TimeLaws, TimeState};
 use crate::shell::stability::{self, TimeEvent};
@@ -250,7 +250,7 @@ pub fn slip_threshold(law: &crate::contact::FrictionLaw) -> f64 {
 fn header(scene: &ShellScene) -> Vec<String> {
     let mut h = vec!["t".to_string(), "lambda".to_string()];
     h.extend(scene.probes.iter().map(|p| p.name.clone()));
-    h.extend(["rn_total", "ft_x", "ft_y", "ft_z", "max_slip", "slip_area"].map(String::from));
+    h.extend(TIME_FORCE_COLUMNS.map(String::from));
     h
 }
 
@@ -382,16 +382,7 @@ fn report(
     };
     if monitored {
         // −1: a non-symmetric tied tangent (follower loads) has no inertia.
-        head.extend(
-            [
-                "negative_pivots",
-                "lowest_eigenvalue",
-                "negative_pivots_tied",
-                "lowest_eigenvalue_tied",
-                "sticking_nodes",
-            ]
-            .map(String::from),
-        );
+        head.extend(TIME_STABILITY_COLUMNS.map(String::from));
         let count = |n: Option<usize>| n.map_or(-1.0, |n| n as f64);
         for (r, st) in rows.iter_mut().zip(&stable) {
             r.extend([

@@ -1741,17 +1741,13 @@ pub const DEFAULT_CONTACT_ARCLENGTH: f64 = 1.0;
 pub const QUANTITIES: &str = "ux, uy, uz, wx, wy, wz, x, y, z, reaction_x, reaction_y, reaction_z, contact_rn, contact_x, contact_y, contact_z, min_gap, contacts, lambda, arclength, tension";
 
 /// The columns of history.csv that a run in time (a scene with
-/// `[friction]`) writes besides the probes (run::shell_time): a probe of the
-/// same name made two columns of one name, and summary.json's `end` kept
-/// one of them.
-const TIME_COLUMNS: [&str; 12] = [
-    "t",
-    "rn_total",
-    "ft_x",
-    "ft_y",
-    "ft_z",
-    "max_slip",
-    "slip_area",
+/// `[friction]`) writes after the probes (run::shell_time): contact and
+/// friction totals, then, with `friction.stability`, the monitor's. A probe
+/// of one of these names, or `t`, made two columns of one name, and
+/// summary.json's `end` kept one of them.
+pub const TIME_FORCE_COLUMNS: [&str; 6] =
+    ["rn_total", "ft_x", "ft_y", "ft_z", "max_slip", "slip_area"];
+pub const TIME_STABILITY_COLUMNS: [&str; 5] = [
     "negative_pivots",
     "lowest_eigenvalue",
     "negative_pivots_tied",
@@ -1772,12 +1768,17 @@ fn probes(
     for (i, p) in raw.iter().enumerate() {
         let key = format!("probe[{i}]");
         let name = p.name.trim();
-        if in_time && TIME_COLUMNS.contains(&name) {
+        let time_columns = || {
+            std::iter::once("t")
+                .chain(TIME_FORCE_COLUMNS)
+                .chain(TIME_STABILITY_COLUMNS)
+        };
+        if in_time && time_columns().any(|col| col == name) {
             return Err(c.fail(
                 &format!("{key}.name"),
                 format!(
                     "`{name}` is a column that a run in time writes itself ({}): choose another name",
-                    TIME_COLUMNS.join(", ")
+                    time_columns().collect::<Vec<_>>().join(", ")
                 ),
             ));
         }

@@ -875,13 +875,9 @@ fn ratio_length(series: &[Vec<f64>], eps: f64, n_ord: usize) -> f64 {
             return s.sqrt();
         }
         // Terms past 1e154 (a fast time constant, a high order): their
-        // squares overflow, which made the length 0 and the step a collapse.
-        let m = series.iter().fold(0.0f64, |m, c| m.max(c[p].abs()));
-        m * series
-            .iter()
-            .map(|c| (c[p] / m).powi(2))
-            .sum::<f64>()
-            .sqrt()
+        // squares overflow, which made the length 0 and the step a collapse;
+        // linalg::norm scales them (off the hot path: only then).
+        crate::linalg::norm(&series.iter().map(|c| c[p]).collect::<Vec<_>>())
     };
     let (n1, nn) = (term_norm(1), term_norm(n_ord));
     let cap = 1e15f64.powf(1.0 / n_ord as f64);
