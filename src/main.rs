@@ -465,7 +465,12 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
             scene,
             ignore_memory,
         } => {
-            let (kind, _) = load(&scene)?;
+            let (kind, point_mass) = load(&scene)?;
+            if let Some(fs) = &point_mass {
+                // The start a run would take: exact initial values checked,
+                // the Newton start converged, the first step taken.
+                anm::model::friction_run::check_start(fs)?;
+            }
             if kind == Kind::Shell {
                 let sc = anm::scene::shell::load(&scene)?;
                 fits_in_memory(&sc, ignore_memory)?;
@@ -754,6 +759,9 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
             out,
             items,
         } => {
+            if max_steps == 0 {
+                anyhow::bail!("--max-steps 0: the step budget must be at least 1");
+            }
             let spec = anm::study::sweep::Spec::Stress {
                 scenes,
                 cases,
@@ -1097,8 +1105,10 @@ fn time_summary(r: &anm::run::shell_time::TimeReport, out: &std::path::Path) -> 
         r.friction_nodes,
         out.display()
     );
-    if let Some(n) = r.stop_node {
-        println!("  singular point at node {n}");
+    match (r.stop_node, r.stop.as_str()) {
+        (Some(n), "singularity") => println!("  singular point at node {n}"),
+        (Some(n), _) => println!("  the trouble is located at node {n}"),
+        (None, _) => {}
     }
     if let Some(m) = &r.stop_message {
         println!("  {m}");

@@ -115,6 +115,13 @@ pub fn read(path: &Path) -> Result<SparseMatrix, String> {
                 if r == 0 || c == 0 || r > n || c > n {
                     return Err(bad(i, &format!("index ({r}, {c}) outside 1..={n}")));
                 }
+                let v: f64 = v;
+                if !v.is_finite() {
+                    return Err(bad(
+                        i,
+                        &format!("entry ({r}, {c}) is {v}, not a finite number"),
+                    ));
+                }
                 m.add(r - 1, c - 1, v);
                 if symmetric && r != c {
                     m.add(c - 1, r - 1, v);

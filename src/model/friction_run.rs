@@ -99,11 +99,13 @@ fn start_in_omega(
     }
 }
 
-/// Solves the scene; writes the outputs into `out_dir` when given.
-pub fn run(scene: &FrictionScene, out_dir: Option<&Path>, progress: bool) -> Result<FrictionRun> {
-    let model = build(scene);
-    let model: &dyn FrictionModel = model.as_ref();
-    let start = Instant::now();
+/// The run's start: its initial values (Newton from the guess, through
+/// omega stages where needed, or the exact ones, checked), a note on how
+/// they were found, and the series' settings.
+fn start(
+    scene: &FrictionScene,
+    model: &dyn FrictionModel,
+) -> Result<(Initialization, String, DaeConfig)> {
     let mut init_note = format!("{:?}", scene.init).to_lowercase();
     let init = match scene.init {
         InitMode::Newton => {
@@ -156,6 +158,45 @@ pub fn run(scene: &FrictionScene, out_dir: Option<&Path>, progress: bool) -> Res
             });
         }
     }
+    Ok((init, init_note, cfg))
+}
+
+/// `anm check` of a point-mass scene: its start (initial values, checked
+/// as a run checks them) and its first step, without output.
+pub fn check_start(scene: &FrictionScene) -> Result<()> {
+    let model = build(scene);
+    let model: &dyn FrictionModel = model.as_ref();
+    let (init, _, cfg) = start(scene, model)?;
+    let first = DaeConfig {
+        max_steps: 1,
+        output_times: vec![],
+        ..cfg
+    };
+    match dae::run(model, &model.u0(), &init, &first, |_, _| Ok(())).error {
+        Some(crate::Error::StepCollapse { length, .. }) => Err(crate::Error::Invalid {
+            file: scene.file.clone(),
+            key: "solver.min_step".into(),
+            problem: first_step_below_floor(length, scene.min_step),
+        }),
+        Some(e) => Err(e),
+        None => Ok(()),
+    }
+}
+
+/// The diagnosis of a first step shorter than the step floor (no shrinking
+/// steps lead there: not a singular point).
+fn first_step_below_floor(length: f64, min_step: f64) -> String {
+    format!(
+        "the first step's series reaches only {length:.3e} s, below solver.min_step = {min_step:.3e} s (1e-13 t_end unless given): the scene's fastest time scale lies below it; lower solver.min_step or t_end"
+    )
+}
+
+/// Solves the scene; writes the outputs into `out_dir` when given.
+pub fn run(scene: &FrictionScene, out_dir: Option<&Path>, progress: bool) -> Result<FrictionRun> {
+    let model = build(scene);
+    let model: &dyn FrictionModel = model.as_ref();
+    let start_time = Instant::now();
+    let (init, init_note, cfg) = start(scene, model)?;
     let grid = scene.output_times();
     let mut next = 0;
     let mut history = Vec::with_capacity(grid.len());
@@ -221,7 +262,7 @@ pub fn run(scene: &FrictionScene, out_dir: Option<&Path>, progress: bool) -> Res
     if let Some(b) = &bar {
         b.finish_and_clear();
     }
-    let wall_s = start.elapsed().as_secs_f64();
+    let wall_s = start_time.elapsed().as_secs_f64();
     let t_singular_estimate = match result.stop.as_str() {
         "singularity" => result
             .t_singular
@@ -233,6 +274,9 @@ pub fn run(scene: &FrictionScene, out_dir: Option<&Path>, progress: bool) -> Res
         t: Some(result.t),
         lambda: None,
         message: match (&result.error, result.stop.as_str()) {
+            (Some(crate::Error::StepCollapse { length, .. }), _) if result.stats.steps == 0 => {
+                Some(first_step_below_floor(*length, scene.min_step))
+            }
             (Some(e), _) => Some(e.to_string()),
             (None, "singularity") => Some(match result.t_singular {
                 Some(ts) => format!(

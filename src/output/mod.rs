@@ -11,6 +11,13 @@ use crate::error::{Error, Result};
 use serde::Serialize;
 use std::path::Path;
 
+/// A CSV value in full precision (17 significant digits, round-trip
+/// exact); a negative zero is written as 0 (a column of rests reads 0, not
+/// -0).
+pub fn csv_number(x: f64) -> String {
+    format!("{:.17e}", x + 0.0)
+}
+
 /// Writes a CSV file with a header row; values in full precision.
 pub fn write_csv(path: &Path, header: &[&str], rows: &[Vec<f64>]) -> Result<()> {
     let err = |e: csv::Error| Error::write(path, e);
@@ -27,7 +34,7 @@ pub fn write_csv(path: &Path, header: &[&str], rows: &[Vec<f64>]) -> Result<()> 
                 ),
             ));
         }
-        w.write_record(row.iter().map(|x| format!("{x:.17e}")))
+        w.write_record(row.iter().map(|&x| csv_number(x)))
             .map_err(err)?;
     }
     w.flush().map_err(|e| Error::write(path, e))
@@ -69,7 +76,7 @@ impl CsvStream {
             ));
         }
         self.writer
-            .write_record(row.iter().map(|x| format!("{x:.17e}")))
+            .write_record(row.iter().map(|&x| csv_number(x)))
             .and_then(|_| self.writer.flush().map_err(csv::Error::from))
             .map_err(|e| Error::write(&self.path, e))
     }

@@ -7,6 +7,7 @@ use super::section::{MembraneStress, membrane_stress, tension};
 use crate::error::{Error, Result};
 use crate::mesh::{CutSide, Grid, Vec3};
 use crate::output::plot::{Curve, Panel, draw};
+use crate::scene::shell::Units;
 use crate::shell::ShellModel;
 use crate::shell::time_path::NodeFriction;
 use std::path::Path;
@@ -152,7 +153,11 @@ pub fn write_csv(path: &Path, rows: &[AlongRow]) -> Result<()> {
 
 /// along.svg: tension, slip speed, and the membrane stresses with the
 /// contact pressure, against the arclength.
-pub fn plot(path: &Path, rows: &[AlongRow]) -> Result<()> {
+pub fn plot(path: &Path, units: Units, rows: &[AlongRow]) -> Result<()> {
+    let s_label = format!("s ({})", units.length);
+    let tension = format!("tension ({})", units.force);
+    let speed = format!("|v_s| ({}/s)", units.length);
+    let stress = format!("stress ({})", units.stress);
     let curve = |label: &'static str, f: fn(&AlongRow) -> f64| Curve {
         label,
         points: rows.iter().map(|r| (r.s, f(r))).collect(),
@@ -162,22 +167,22 @@ pub fn plot(path: &Path, rows: &[AlongRow]) -> Result<()> {
         &[
             Panel {
                 title: "tension along the strip",
-                x_label: "s (m)",
-                y_label: "tension (N)",
+                x_label: &s_label,
+                y_label: &tension,
                 curves: vec![curve("tension", |r| r.tension)],
                 log: (false, false),
             },
             Panel {
                 title: "largest slip speed of each cross-section",
-                x_label: "s (m)",
-                y_label: "|v_s| (m/s)",
+                x_label: &s_label,
+                y_label: &speed,
                 curves: vec![curve("slip_speed", |r| r.slip_speed)],
                 log: (false, false),
             },
             Panel {
                 title: "membrane stresses and contact pressure",
-                x_label: "s (m)",
-                y_label: "stress (Pa)",
+                x_label: &s_label,
+                y_label: &stress,
                 curves: vec![
                     curve("stress_along", |r| r.stress_along),
                     curve("stress_across_min", |r| r.stress_across_min),

@@ -10,7 +10,7 @@ use crate::mesh::Vec3;
 use crate::scene::shell::{Load, ShellScene};
 use crate::shell::model::FollowerPressure;
 use crate::shell::{FollowerCouple, ShellModel};
-use nalgebra::{Matrix6, SymmetricEigen};
+use nalgebra::{DMatrix, Matrix6, SymmetricEigen};
 
 /// Builds the shell model of a scene. Errors name the scene key at fault: an
 /// inverted element (mesh file and line), a contact node that starts inside
@@ -99,6 +99,17 @@ pub fn build_model(scene: &ShellScene) -> Result<ShellModel> {
         if scene.friction.is_some() {
             m.keep_nearest_pairs();
         }
+        if scene.friction.is_none() {
+            // Frictionless contact holds a rigid motion only along the
+            // obstacles' normals (in time, with friction, the strip's
+            // rigid motion along its path is the conveying itself).
+            let normals: Vec<(usize, Vec3)> = m
+                .pairs
+                .iter()
+                .filter_map(|p| Some((p.node, m.obstacles[p.obstacle].gap(&m.x0[p.node])?.n)))
+                .collect();
+            check_rigid_modes(scene, &normals)?;
+        }
         m.kink_band = kink_band(&m, scene.solver.residual_tol);
         if !far_nodes_may_be_skipped(&m, scene.solver.residual_tol) {
             m.search_distance = f64::INFINITY;
@@ -106,7 +117,7 @@ pub fn build_model(scene: &ShellScene) -> Result<ShellModel> {
             m.update_active(&rest, 0.0);
         }
     } else {
-        check_rigid_modes(scene)?;
+        check_rigid_modes(scene, &[])?;
     }
     Ok(m)
 }
@@ -200,16 +211,102 @@ pub fn far_nodes_may_be_skipped(m: &ShellModel, residual_tol: f64) -> bool {
     bound <= residual_tol * load_norm(m)
 }
 
-/// Fixes must hold every rigid-body motion of the shell (no contact to do
-/// it). A rigid motion (translation t, rotation ω about the mesh centroid c)
-/// moves node n by t + ω × (X_n − c) and turns its director by ω × A3; it is
-/// free when it moves no fixed dof. The free ones are the null space of the
-/// 6 × 6 Gram matrix of the fixed rows of the six modes.
-fn check_rigid_modes(scene: &ShellScene) -> Result<()> {
+/// The free rigid motions, the columns of `null` (orthonormal; rows t, then
+/// ω scaled by the model size), in words. The basis is first turned so
+/// that its pure translations come apart (the right singular vectors of
+/// its rotation rows with a zero singular value); each other motion is
+/// then a rotation ω about the axis through p = c + ω × t / |ω|² (plus a
+/// slide along ω, a screw, where t · ω ≠ 0): a plate on a cylinder turns
+/// about the cylinder's axis.
+fn describe_free_motions(null: &DMatrix<f64>, c: Vec3, size: f64) -> Vec<String> {
+    if null.ncols() == 0 {
+        return vec![];
+    }
+    let rotation = null.rows(3, 3).into_owned();
+    let svd = rotation.svd(false, true);
+    let v_t = svd.v_t.expect("asked for");
+    let basis = null * v_t.transpose();
+    let clean = |x: f64| if x.abs() < 1e-9 { 0.0 } else { x };
+    let xyz = |v: Vec3| {
+        format!(
+            "({:.3}, {:.3}, {:.3})",
+            clean(v[0]),
+            clean(v[1]),
+            clean(v[2])
+        )
+    };
+    (0..basis.ncols())
+        .map(|j| {
+            let u = basis.column(j);
+            let (mut t, mut w) = (
+                Vec3::new(u[0], u[1], u[2]),
+                Vec3::new(u[3], u[4], u[5]) / size,
+            );
+            // The sign that makes the direction's largest component
+            // positive (a null vector's sign is arbitrary).
+            let d = if w.norm() * size < 1e-9 { t } else { w };
+            if d[d.iamax()] < 0.0 {
+                (t, w) = (-t, -w);
+            }
+            if w.norm() * size < 1e-9 {
+                return format!("translation along {}", xyz(t / t.norm()));
+            }
+            let axis = w / w.norm();
+            let p = c + w.cross(&t) / w.norm_squared();
+            let slide = t.dot(&axis);
+            let screw = match slide.abs() < 1e-9 * t.norm().max(w.norm() * size) {
+                true => String::new(),
+                false => format!(
+                    " with a slide along it ({:.3e} per radian)",
+                    slide / w.norm()
+                ),
+            };
+            format!(
+                "rotation about the axis {} through ({:.4}, {:.4}, {:.4}){screw}",
+                xyz(axis),
+                clean(p[0]),
+                clean(p[1]),
+                clean(p[2])
+            )
+        })
+        .collect()
+}
+
+/// Fixes and frictionless contact must hold every rigid-body motion of the
+/// shell. A rigid motion (translation t, rotation ω about the mesh centroid
+/// c) moves node n by t + ω × (X_n − c) and turns its director by ω × A3; it
+/// is free when it moves no fixed dof and changes no contact candidate's gap
+/// to first order (its displacement along the obstacle's normal n at the
+/// node, `contact`). The free ones are the null space of the 6 × 6 Gram
+/// matrix of those rows of the six modes. (A shell resting on a cylinder
+/// alone may slide along its axis and turn about it: its tangent is
+/// singular, and the factorization's round-off pivots read as bifurcations.)
+fn check_rigid_modes(scene: &ShellScene, contact: &[(usize, Vec3)]) -> Result<()> {
     let x0 = &scene.mesh.nodes;
     let c = x0.iter().fold(Vec3::zeros(), |a, x| a + x) / x0.len() as f64;
     let size = scene.mesh.size();
     let mut g = Matrix6::<f64>::zeros();
+    let mut add = |row: [f64; 6]| {
+        for i in 0..6 {
+            for j in 0..6 {
+                g[(i, j)] += row[i] * row[j];
+            }
+        }
+    };
+    for &(node, n) in contact {
+        let mut row = [0.0; 6];
+        for (j, r) in row.iter_mut().enumerate() {
+            let mut e = Vec3::zeros();
+            e[j % 3] = 1.0;
+            let motion = if j < 3 {
+                e
+            } else {
+                e.cross(&(x0[node] - c)) / size
+            };
+            *r = n.dot(&motion) / n.norm();
+        }
+        add(row);
+    }
     for d in scene.fixed.keys() {
         let k = d.component.offset() % 3;
         let mut row = [0.0; 6];
@@ -229,36 +326,18 @@ fn check_rigid_modes(scene: &ShellScene) -> Result<()> {
             };
             *r = motion[k];
         }
-        for i in 0..6 {
-            for j in 0..6 {
-                g[(i, j)] += row[i] * row[j];
-            }
-        }
+        add(row);
     }
     let eig = SymmetricEigen::new(g);
     let top = eig.eigenvalues.max().max(1.0);
-    let mut free = vec![];
-    for (i, &l) in eig.eigenvalues.iter().enumerate() {
-        if l <= 1e-10 * top {
-            let v = eig.eigenvectors.column(i);
-            let clean = |x: f64| if x.abs() < 1e-9 { 0.0 } else { x };
-            let t = Vec3::new(clean(v[0]), clean(v[1]), clean(v[2]));
-            let w = Vec3::new(clean(v[3]), clean(v[4]), clean(v[5]));
-            free.push(if w.norm() < 1e-9 {
-                format!("translation along ({:.3}, {:.3}, {:.3})", t[0], t[1], t[2])
-            } else if t.norm() < 1e-9 {
-                format!(
-                    "rotation about the axis ({:.3}, {:.3}, {:.3}) through the mesh centroid ({:.4}, {:.4}, {:.4})",
-                    w[0], w[1], w[2], c[0], c[1], c[2]
-                )
-            } else {
-                format!(
-                    "rigid motion (translation ({:.3}, {:.3}, {:.3}), rotation ({:.3}, {:.3}, {:.3}) about the centroid)",
-                    t[0], t[1], t[2], w[0], w[1], w[2]
-                )
-            });
-        }
-    }
+    let null: Vec<usize> = (0..6)
+        .filter(|&i| eig.eigenvalues[i] <= 1e-10 * top)
+        .collect();
+    let free = describe_free_motions(
+        &DMatrix::from_fn(6, null.len(), |r, j| eig.eigenvectors[(r, null[j])]),
+        c,
+        size,
+    );
     if free.is_empty() {
         return Ok(());
     }
@@ -266,7 +345,12 @@ fn check_rigid_modes(scene: &ShellScene) -> Result<()> {
         file: scene.file.clone(),
         key: "fix".into(),
         problem: format!(
-            "the fixed dofs leave the shell free to move as a rigid body (singular stiffness): {}; fix more components ([[fix]] with clamp, symmetry, simply_supported or dofs)",
+            "the fixed dofs{} leave the shell free to move as a rigid body (singular stiffness): {}; fix more components ([[fix]] with clamp, symmetry, simply_supported or dofs)",
+            match contact.is_empty() {
+                true => "",
+                false =>
+                    " and the frictionless contact (which holds only along the obstacles' normals)",
+            },
             free.join("; ")
         ),
     })

@@ -354,7 +354,7 @@ impl<'s> Recorder<'s> {
             });
         }
         if let Some(w) = &mut self.history {
-            w.write_record(row.iter().map(|x| format!("{x:.17e}")))
+            w.write_record(row.iter().map(|&x| crate::output::csv_number(x)))
                 .and_then(|_| w.flush().map_err(csv::Error::from))
                 .map_err(|e| {
                     Error::write(self.dir.clone().unwrap_or_default().join("history.csv"), e)

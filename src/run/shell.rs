@@ -1139,7 +1139,10 @@ pub(crate) fn probe_plot(
             format!("{stem}: {what}")
         })
         .collect();
-    let ylabels: Vec<String> = groups.iter().map(|(u, _)| format!("value ({u})")).collect();
+    let ylabels: Vec<String> = groups
+        .iter()
+        .map(|(u, _)| format!("value ({})", scene.units.of(u)))
+        .collect();
     let panels: Vec<Panel> = groups
         .iter()
         .enumerate()

@@ -27,7 +27,7 @@ use crate::error::{Error, Result};
 use crate::output::mode;
 use crate::output::plot::{Curve, Panel, draw};
 use crate::output::vtk::{PointData, write_vtu_cells};
-use crate::scene::shell::{ShellScene, TIME_FORCE_COLUMNS, TIME_STABILITY_COLUMNS};
+use crate::scene::shell::{ShellScene, TIME_FORCE_COLUMNS, TIME_STABILITY_COLUMNS, Units};
 use crate::series::ContinuationProblem;
 use crate::shell::friction_dae::{FrictionDae, TimeLaws, TimeState};
 use crate::shell::stability::{self, TimeEvent};
@@ -62,7 +62,8 @@ pub struct TimeReport {
     /// trouble that stopped the run (e.g. "time_steps").
     pub stop: String,
     pub stop_t: f64,
-    /// 1-based node of a singularity.
+    /// 1-based node of a singularity, or the node a numerical stop's
+    /// diagnosis names.
     pub stop_node: Option<usize>,
     /// The diagnosis of a run stopped by numerical trouble.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -531,7 +532,7 @@ fn report(
         }
         w.flush().map_err(|e| write_err(&file)(e.to_string()))?;
         write_fields(&dir.join("friction.vtu"), scene, &dae, last)?;
-        plot(&dir.join("friction.svg"), &head, &rows)?;
+        plot(&dir.join("friction.svg"), scene.units, &head, &rows)?;
         // The probes, as a static run plots them (columns t, lambda, then
         // the probes).
         if scene.output.plot && rows.len() > 1 {
@@ -548,7 +549,7 @@ fn report(
                 slip_threshold(&law),
             );
             along_strip::write_csv(&dir.join("along.csv"), &along)?;
-            along_strip::plot(&dir.join("along.svg"), &along)?;
+            along_strip::plot(&dir.join("along.svg"), scene.units, &along)?;
         }
         if monitored {
             write_events(dir, &dae, &scene.mesh.quads, &mut report.events)?;
@@ -623,7 +624,7 @@ fn write_fields(path: &Path, scene: &ShellScene, dae: &FrictionDae, s: &TimeSamp
 }
 
 /// The friction totals and the largest slip speed against t.
-fn plot(path: &Path, head: &[String], rows: &[Vec<f64>]) -> Result<()> {
+fn plot(path: &Path, units: Units, head: &[String], rows: &[Vec<f64>]) -> Result<()> {
     let col = |name: &str| {
         head.iter()
             .position(|h| h == name)
@@ -633,13 +634,15 @@ fn plot(path: &Path, head: &[String], rows: &[Vec<f64>]) -> Result<()> {
         label: name,
         points: rows.iter().map(|r| (r[0], r[col(name)])).collect(),
     };
+    let force = format!("force ({})", units.force);
+    let speed = format!("|v_s| ({}/s)", units.length);
     draw(
         path,
         &[
             Panel {
                 title: "normal and friction forces on the shell",
                 x_label: "t (s)",
-                y_label: "force (N)",
+                y_label: &force,
                 curves: vec![
                     curve("rn_total"),
                     curve("ft_x"),
@@ -651,7 +654,7 @@ fn plot(path: &Path, head: &[String], rows: &[Vec<f64>]) -> Result<()> {
             Panel {
                 title: "largest slip speed",
                 x_label: "t (s)",
-                y_label: "|v_s| (m/s)",
+                y_label: &speed,
                 curves: vec![curve("max_slip")],
                 log: (false, false),
             },

@@ -352,7 +352,7 @@ pub fn load(path: &Path, text: &str, kind: Kind) -> Result<FrictionScene> {
     if min_step >= t_end {
         return Err(c.fail(
             "solver.min_step",
-            format!("must be below solver.t_end = {t_end}, got {min_step}"),
+            format!("must be below solver.t_end = {t_end:?}, got {min_step:?}"),
         ));
     }
     let newton_tol = c.positive("solver.newton_tol", s.newton_tol.unwrap_or(1e-14))?;
@@ -385,7 +385,7 @@ pub fn load(path: &Path, text: &str, kind: Kind) -> Result<FrictionScene> {
     if dt > t_end {
         return Err(c.fail(
             "output.dt",
-            format!("must not exceed solver.t_end = {t_end}, got {dt}"),
+            format!("must not exceed solver.t_end = {t_end:?}, got {dt:?}"),
         ));
     }
     let rows = t_end / dt;

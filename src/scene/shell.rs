@@ -51,6 +51,56 @@ struct Raw {
 struct RawScene {
     kind: String,
     description: Option<String>,
+    units: Option<String>,
+}
+
+/// The unit names of a scene's numbers (`scene.units`), for the labels of
+/// its plots only: the solver itself has no unit.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Units {
+    pub length: &'static str,
+    pub force: &'static str,
+    pub stress: &'static str,
+}
+
+impl Units {
+    /// `scene.units` absent: the plots name the quantity, not a unit.
+    pub const UNSTATED: Units = Units {
+        length: "length unit",
+        force: "force unit",
+        stress: "stress unit",
+    };
+
+    /// The label of a probe's unit as the scene states it (a probe's unit
+    /// is "m", "N" or "-").
+    pub fn of(&self, probe_unit: &str) -> &'static str {
+        match probe_unit {
+            "m" => self.length,
+            "N" => self.force,
+            "Pa" => self.stress,
+            _ => "-",
+        }
+    }
+}
+
+fn units(c: &Checker, value: Option<&str>) -> Result<Units> {
+    match value {
+        None => Ok(Units::UNSTATED),
+        Some("m") => Ok(Units {
+            length: "m",
+            force: "N",
+            stress: "Pa",
+        }),
+        Some("mm") => Ok(Units {
+            length: "mm",
+            force: "N",
+            stress: "MPa",
+        }),
+        Some(other) => Err(c.fail(
+            "scene.units",
+            format!("expected \"m\" (m, N, Pa) or \"mm\" (mm, N, MPa), got \"{other}\""),
+        )),
+    }
 }
 
 #[derive(Deserialize)]
@@ -409,6 +459,8 @@ pub struct ShellScene {
     /// refuses a changed scene), without reading the file again.
     pub text: String,
     pub description: Option<String>,
+    /// scene.units: the unit names of the plots' labels.
+    pub units: Units,
     pub mesh: Mesh,
     pub directors: Vec<Vec3>,
     pub material: Material,
@@ -694,6 +746,15 @@ pub fn load(path: &Path) -> Result<ShellScene> {
             "a scene with [friction] is solved in time by the series (solver.time_step); `newton` and `linear` do not apply: remove solver.method",
         ));
     }
+    if contact.is_some() && matches!(method, Method::Linear) {
+        // The linear solve keeps the tangent at lambda = 0, where the gap
+        // law is either off (the shell passes through the obstacle) or at
+        // its initial stiffness: either way not a contact solution.
+        return Err(c.fail(
+            "solver.method",
+            "= \"linear\" solves with the tangent at lambda = 0, and contact is not linear (the gap law switches where the shell touches): use \"anm\" or \"newton\" with [contact], or remove [contact]",
+        ));
+    }
     if friction.is_some() {
         // Keys of the continuation in lambda that a run in time would
         // ignore.
@@ -756,6 +817,13 @@ pub fn load(path: &Path) -> Result<ShellScene> {
                 format!("{l} is not a value of the lambda grid (multiples of output.lambda_step = {lambda_step})"),
             ));
         }
+        let end = solver.lambda_end.abs();
+        if l > end * (1.0 + 1e-12) {
+            return Err(c.fail(
+                &format!("output.snapshots[{k}]"),
+                format!("{l} lies beyond solver.lambda_end = {end}: the path never reaches it"),
+            ));
+        }
     }
     let hdf5 = o.hdf5.unwrap_or(false);
     if hdf5 && !cfg!(feature = "hdf5") {
@@ -769,6 +837,7 @@ pub fn load(path: &Path) -> Result<ShellScene> {
         branch,
         file: path.to_path_buf(),
         text,
+        units: units(&c, raw.scene.units.as_deref())?,
         description: raw.scene.description,
         directors,
         material: Material { young, poisson },
@@ -1141,6 +1210,23 @@ fn strip(c: &Checker, m: &RawMesh, obstacles: &[ObstacleSpec]) -> Result<Mesh> {
     })?;
     let p =
         strip_path::path(start, end, &rollers, offset).map_err(|e| c.fail("mesh.rollers", e))?;
+    // A wrap whose arc is far shorter than an element is a strip that
+    // barely touches the roller, most often a `turn` the wrong way: its one
+    // arc element would be a sliver (review 3: 1e-4 degrees, a run that
+    // collapsed at t = 1.2e-9 s).
+    for (k, (r, wrap)) in rollers.iter().zip(&p.wraps).enumerate() {
+        let arc = (r.radius + offset) * wrap;
+        if arc < 1e-2 * arc_h {
+            return Err(c.fail(
+                &format!("mesh.turn[{k}]"),
+                format!(
+                    "the strip wraps roller `{}` by {:.3e} degrees only (an arc of {arc:.3e}, below 1/100 of the arc element length {arc_h:?}): it barely touches it; check its turn and the positions",
+                    r.name,
+                    wrap.to_degrees()
+                ),
+            ));
+        }
+    }
     // The cylinders along x that the path does not wrap must stay clear of
     // it too: the strip would start inside them.
     for (i, o) in obstacles.iter().enumerate() {
@@ -1574,7 +1660,7 @@ fn friction(
         if !(end >= start && start < t_end) {
             return Err(c.fail(
                 key,
-                format!("[start, end] = [{start}, {end}] must have start <= end and start < friction.t_end = {t_end}"),
+                format!("[start, end] = [{start:?}, {end:?}] must have start <= end and start < friction.t_end = {t_end:?}"),
             ));
         }
         Ok(Ramp { start, end })
@@ -1616,13 +1702,15 @@ fn friction(
     if output_step > t_end {
         return Err(c.fail(
             "friction.output_step",
-            format!("{output_step} s is longer than the run (t_end = {t_end} s): at most t_end"),
+            format!(
+                "{output_step:?} s is longer than the run (t_end = {t_end:?} s): at most t_end"
+            ),
         ));
     }
     if t_end / output_step > 1e6 {
         return Err(c.fail(
             "friction.output_step",
-            format!("{output_step} s gives more than 1e6 rows up to t_end = {t_end} s"),
+            format!("{output_step:?} s gives more than 1e6 rows up to t_end = {t_end:?} s"),
         ));
     }
     let stepping = match time_step {

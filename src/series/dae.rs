@@ -639,6 +639,12 @@ fn run_with<P: DaeProblem + ?Sized>(
                     eng.stats.corrections += 1;
                 }
             }
+            // At the first step no shrinking steps point at a singular
+            // point: the scene's fastest time scale lies below min_step
+            // (e.g. its default 1e-13 t_end with an absurd t_end).
+            Err(e @ Error::StepCollapse { .. }) if eng.stats.steps == 0 => {
+                return finish(eng.stats, "", t, Some(e), r0);
+            }
             Err(Error::StepCollapse { .. }) => {
                 return finish(eng.stats, "singularity", t, None, r0);
             }

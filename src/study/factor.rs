@@ -25,9 +25,9 @@ pub struct FactorReport {
     /// Numeric factorization, best of `repeat`.
     pub factorization_s: f64,
     pub solve_s: f64,
-    /// Entries of L (symmetric backends; 0 for LU, whose faer factor does
-    /// not report its size).
-    pub factor_entries: usize,
+    /// Entries of L (symmetric backends; None for LU, whose faer factor
+    /// does not report its size).
+    pub factor_entries: Option<usize>,
     pub backward_error: f64,
     pub negative_pivots: Option<usize>,
     pub peak_rss_bytes: Option<u64>,
@@ -67,7 +67,7 @@ pub fn run(path: &Path, choice: Choice, threads: usize, repeat: usize) -> Result
         analysis_s: stats.analysis_s,
         factorization_s: best,
         solve_s,
-        factor_entries: stats.factor_entries,
+        factor_entries: Some(stats.factor_entries).filter(|&e| e > 0),
         backward_error: f.backward_error(),
         negative_pivots: f.inertia().map(|i| i.0),
         peak_rss_bytes: crate::output::peak_rss_bytes(),
@@ -111,10 +111,9 @@ pub fn markdown(rows: &[FactorReport]) -> String {
         "| solver | threads | analysis (s) | factorization (s) | solve (s) | factor entries | backward error | peak memory of the process (MiB) |\n|---|---|---|---|---|---|---|---|\n",
     );
     for r in rows {
-        let entries = if r.factor_entries > 0 {
-            format!("{:.3e}", r.factor_entries as f64)
-        } else {
-            "–".into()
+        let entries = match r.factor_entries {
+            Some(e) => format!("{:.3e}", e as f64),
+            None => "–".into(),
         };
         s += &format!(
             "| {} | {} | {:.3} | {:.3} | {:.4} | {entries} | {:.1e} | {:.0} |\n",
@@ -189,7 +188,7 @@ pub fn peers(matrix: &Path, threads: &str) -> Result<Option<Vec<FactorReport>>> 
                         analysis_s: num("analysis_s"),
                         factorization_s: num("factorization_s"),
                         solve_s: num("solve_s"),
-                        factor_entries: r["factor_entries"].as_u64().unwrap_or(0) as usize,
+                        factor_entries: r["factor_entries"].as_u64().map(|e| e as usize),
                         backward_error: num("backward_error"),
                         negative_pivots: r["negative_pivots"].as_u64().map(|k| k as usize),
                         peak_rss_bytes: r["peak_rss_MiB"].as_f64().map(|m| (m * 1048576.0) as u64),

@@ -11,6 +11,8 @@
 //!   scene's canonical figure);
 //! - **diagnosed**: it stopped on an error or a step budget with a message
 //!   naming what happened, and the output it did write solves the equations;
+//! - **refused**: the scene's own checks refused the run before it started
+//!   (an axis value outside what the scene accepts): no numerical stop;
 //! - **failed**: a panic, a non-finite number in the output, or output that
 //!   does not solve the equations (a wrong answer presented as valid).
 
@@ -49,6 +51,7 @@ pub fn canonical_uz_a(name: &str) -> Option<f64> {
 pub enum Verdict {
     Met,
     Diagnosed,
+    Refused,
     Failed,
 }
 
@@ -197,13 +200,21 @@ pub fn run_job(job: &StressJob) -> StressCase {
     }
 }
 
-/// A run that stopped with an error: diagnosed, with the error's kind.
+/// A run that stopped with an error: diagnosed, with the error's kind, or
+/// refused where the error is the input checks' (nothing was computed).
 fn diagnosed(scene: String, axis: &str, value: f64, e: &crate::error::Error) -> StressCase {
+    let input = matches!(
+        e,
+        Error::Invalid { .. } | Error::Parse { .. } | Error::Mesh { .. } | Error::Element { .. }
+    );
     StressCase {
         scene,
         axis: axis.to_string(),
         value,
-        verdict: Verdict::Diagnosed,
+        verdict: match input {
+            true => Verdict::Refused,
+            false => Verdict::Diagnosed,
+        },
         stop: e.kind().into(),
         message: e.to_string(),
         residual: 0.0,
@@ -407,11 +418,15 @@ pub fn markdown(cases: &[StressCase]) -> String {
     let mut s = String::new();
     let count = |v: Verdict| cases.iter().filter(|c| c.verdict == v).count();
     s += &format!(
-        "{} runs: {} met, {} diagnosed stops, {} failed\n\n",
+        "{} runs: {} met, {} diagnosed stops, {} failed{}\n\n",
         cases.len(),
         count(Verdict::Met),
         count(Verdict::Diagnosed),
-        count(Verdict::Failed)
+        count(Verdict::Failed),
+        match count(Verdict::Refused) {
+            0 => String::new(),
+            n => format!(", {n} refused by the scene checks (not run)"),
+        }
     );
     s += "| scene | axis | value: verdict (stop, steps, max relative residual) |\n|---|---|---|\n";
     let mut keys: Vec<(String, &str)> = cases
@@ -427,6 +442,7 @@ pub fn markdown(cases: &[StressCase]) -> String {
                 let v = match c.verdict {
                     Verdict::Met => "met",
                     Verdict::Diagnosed => "diagnosed",
+                    Verdict::Refused => "refused",
                     Verdict::Failed => "**FAILED**",
                 };
                 format!(

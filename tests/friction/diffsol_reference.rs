@@ -502,10 +502,14 @@ fn exact_initial_values_are_checked() {
     let e = anm_run(&wrong, None, false).expect_err("an inexact v0 must be refused");
     let message = e.to_string();
     assert!(message.contains("initial.v0"), "{message}");
+    // `anm check` tries the same start (review 3: it did not).
+    let e = anm::model::friction_run::check_start(&wrong).expect_err("check must refuse it");
+    assert!(e.to_string().contains("initial.v0"), "{e}");
     let right = friction_scene(
         "friction-1d.toml",
         &[("initial.mode", "\"exact\""), ("initial.v0", "1.0")],
     );
+    anm::model::friction_run::check_start(&right).expect("the exact v0 passes the check");
     let a = anm_run(&right, None, false).unwrap_or_else(|e| panic!("ANM failed: {e}"));
     assert_eq!(a.stop.reason, "end", "{:?}", a.stop);
 }

@@ -13,17 +13,22 @@ fn scene_with(edit: impl Fn(&str) -> String, name: &str) -> ScratchFile {
     ScratchFile::with_text("bad", &format!("{name}.toml"), &edit(&base))
 }
 
+/// `anm run SCENE -o OUT --quiet`, its output.
+fn run_to(scene: &Path, out: &Path) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_anm"))
+        .arg("run")
+        .arg(scene)
+        .arg("-o")
+        .arg(out)
+        .arg("--quiet")
+        .output()
+        .unwrap()
+}
+
 /// Runs `anm run SCENE -o OUT` and returns (exit code, stderr, out dir exists).
 fn run(scene: &Path) -> (i32, String, bool) {
     let out = scene.with_extension("out");
-    let o = Command::new(env!("CARGO_BIN_EXE_anm"))
-        .args(["run"])
-        .arg(scene)
-        .arg("-o")
-        .arg(&out)
-        .arg("--quiet")
-        .output()
-        .unwrap();
+    let o = run_to(scene, &out);
     (
         o.status.code().unwrap_or(-1),
         String::from_utf8_lossy(&o.stderr).into_owned(),
@@ -126,6 +131,32 @@ fn min_step_not_below_end_time() {
         "minstep",
     );
     expect_error(&p, &["solver.min_step", "below solver.t_end"]);
+}
+
+/// Review 3: t_end = 1e300 s makes the default step floor (1e-13 t_end)
+/// 1e287 s; the first step, which reaches 1e-1 s or so, stopped the run "at
+/// a singular point" at t = 0 with exit 0. A floor above the very first
+/// step is a step collapse naming the key, exit 2.
+#[test]
+fn a_first_step_below_the_floor_is_no_singularity() {
+    let p = scene_with(
+        |s| {
+            s.replace("t_end = 3.0", "t_end = 1e300")
+                .replace("dt = 0.01", "dt = 1e298")
+        },
+        "huge-end",
+    );
+    let out = p.with_extension("out");
+    let o = run_to(&p, &out);
+    let text =
+        String::from_utf8_lossy(&o.stdout).into_owned() + &String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{text}");
+    assert!(text.contains("stop = step_collapse"), "{text}");
+    assert!(
+        text.contains("below solver.min_step = 1.000e287 s"),
+        "{text}"
+    );
+    let _ = std::fs::remove_dir_all(out);
 }
 
 #[test]
@@ -254,14 +285,7 @@ fn output_folder_that_is_a_file() {
     let file = p.with_extension("txt");
     std::fs::write(&file, "keep").unwrap();
     for out in [file.clone(), file.join("sub")] {
-        let o = Command::new(env!("CARGO_BIN_EXE_anm"))
-            .arg("run")
-            .arg(&*p)
-            .arg("-o")
-            .arg(&out)
-            .arg("--quiet")
-            .output()
-            .unwrap();
+        let o = run_to(&p, &out);
         let err = String::from_utf8_lossy(&o.stderr);
         println!("{err}");
         assert_eq!(o.status.code(), Some(1), "{err}");

@@ -222,6 +222,53 @@ fn a_fix_that_leaves_a_rigid_motion_free_names_it() {
     );
 }
 
+/// Review 3: a plate held by frictionless contact alone, on a cylinder
+/// along y, may slide along the axis and turn about it. Its tangent was
+/// singular and the run reported round-off pivots as 13 bifurcations; the
+/// error now names both motions, the rotation through the cylinder's axis
+/// (x = 1, z = 0.5001 in the scene).
+#[test]
+fn a_shell_held_by_frictionless_contact_alone_is_refused() {
+    let s = scene(
+        "contact-only.toml",
+        &mesh_path(),
+        &[("[[fix]]\ngroup = \"clamp\"\nclamp = true\n", "")],
+    );
+    expect_err(
+        load(&s).and_then(|sc| anm::run::build::build_model(&sc).map(|_| ())),
+        &[
+            "contact-only.toml",
+            "`fix`",
+            "frictionless contact",
+            "rigid body",
+            "translation along (0.000, 1.000, 0.000)",
+            "rotation about the axis (0.000, 1.000, 0.000) through (1.0000, 0.0000, 0.5001)",
+        ],
+    );
+    // Review 3: the linear solve kept the tangent at rest and pushed the
+    // plate 1 cm into the cylinder (2e7 N of reaction for 1 N of load).
+    let s = scene(
+        "linear-contact.toml",
+        &mesh_path(),
+        &[
+            ("order = 15\neps = 1e-8", "method = \"linear\""),
+            ("pade = true\n", ""),
+            ("correct = true\nmax_corrections = 10\n", ""),
+        ],
+    );
+    expect_err(
+        load(&s),
+        &[
+            "linear-contact.toml",
+            "solver.method",
+            "contact is not linear",
+        ],
+    );
+    // Clamped, the same scene builds.
+    let s = scene("contact-clamped.toml", &mesh_path(), &[]);
+    anm::run::build::build_model(&load(&s).unwrap()).expect("the clamp holds it");
+}
+
 #[test]
 fn obstacle_motion_with_a_zero_axis_or_bad_keys_is_rejected() {
     let s = scene(
@@ -368,6 +415,18 @@ fn fix_and_probe_key_errors_name_the_key() {
             "order = 15",
             "order = 15\nmethod = \"linear\"",
             vec!["solver.order", "not used by solver.method = \"linear\""],
+        ),
+        (
+            "snapshot-beyond.toml",
+            "lambda_end = 1.0",
+            "lambda_end = 0.5",
+            vec!["output.snapshots[4]", "beyond solver.lambda_end = 0.5"],
+        ),
+        (
+            "units.toml",
+            "units = \"m\"",
+            "units = \"inch\"",
+            vec!["scene.units", "\"inch\""],
         ),
         (
             "length-scale.toml",

@@ -292,7 +292,22 @@ type Case<'a> = (&'a str, &'a [(&'a str, &'a str)], &'a str, &'a str);
 #[test]
 fn loops_unwrapped_cylinders_and_static_methods_are_refused() {
     let base = format!("{}/{BASE}", env!("CARGO_MANIFEST_DIR"));
-    let cases: [Case; 3] = [
+    let cases: [Case; 4] = [
+        // Review 3: a strip that touches r1 over 1e-4 degrees (its one arc
+        // element a sliver) passed `check` and collapsed at t = 1.2e-9 s.
+        (
+            "sliver.toml",
+            &[
+                (
+                    "end = [2.6856406460551017, 0.8856406560551019]",
+                    "end = [0.5, 0.29999901]",
+                ),
+                ("rollers = [\"r1\", \"r2\", \"r3\"]", "rollers = [\"r1\"]"),
+                ("turn = [\"cw\", \"ccw\", \"cw\"]", "turn = [\"cw\"]"),
+            ],
+            "mesh.turn[0]",
+            "wraps roller `r1` by 1.146e-4 degrees only",
+        ),
         (
             "loop.toml",
             &[(
