@@ -1201,6 +1201,12 @@ fn shell_summary(report: &anm::run::RunReport, out: &std::path::Path) -> ExitCod
     if let Some(m) = &report.stop.message {
         println!("  {m}");
     }
+    if let Some(l) = report.switched_at {
+        println!("  switched to the secondary branch at lambda = {l:.6e}");
+    }
+    if let Some(n) = &report.branch_note {
+        println!("  note: {n}");
+    }
     // The critical points the path crossed (summary.json `events`).
     for e in &report.events {
         let pivots = e.negative_pivots.map_or(String::new(), |(a, b)| {

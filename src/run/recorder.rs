@@ -320,7 +320,7 @@ impl<'s> Recorder<'s> {
         let mut out = vec![];
         let ka = (a / d).floor() as i64 - 1;
         let kb = (b / d).ceil() as i64 + 1;
-        let (lo, hi) = (ka.min(kb), ka.max(kb));
+        let (lo, hi) = (ka.min(kb) - 1, ka.max(kb) + 1);
         for k in lo..=hi {
             let g = k as f64 * d;
             let inside = if b >= a {
@@ -334,8 +334,10 @@ impl<'s> Recorder<'s> {
                 out.push(g);
             }
         }
-        if b < a {
-            out.reverse();
+        // In the order met (the grid step is negative where lambda_end is).
+        match b < a {
+            true => out.sort_by(|x, y| y.total_cmp(x)),
+            false => out.sort_by(|x, y| x.total_cmp(y)),
         }
         out
     }
@@ -416,6 +418,7 @@ impl<'s> Recorder<'s> {
                 lambda,
                 arclength: 0.0,
                 residual: None,
+                linear: None,
             },
         );
         let v = |a: &[[f64; 3]]| {

@@ -80,6 +80,10 @@ pub struct RunReport {
     /// the path left for the bifurcated branch.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub switched_at: Option<f64>,
+    /// With solver.branch = "secondary" and no switch: why the path is the
+    /// primary one.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub branch_note: Option<String>,
     /// Contact pairs that changed side of their law's switch between step
     /// ends, summed over the run (steps.csv `contact_switches`): a row of
     /// nodes touching counts its nodes.
@@ -362,6 +366,7 @@ fn run_inner(
                 lambda: 0.0,
                 arclength: 0.0,
                 residual: None,
+                linear: None,
             },
         )?;
         rec.vtk(&model, &full0, 0.0, "shell_0000.vtu")?;
@@ -439,6 +444,9 @@ fn run_inner(
                         .cloned();
                 }
                 let a_max = switch.as_ref().map_or(f64::INFINITY, |e| e.a);
+                // Points past the switch lie on the primary path the run
+                // leaves there (review 4: reported as events of the run).
+                events.retain(|e| e.a <= a_max);
                 let points: Vec<_> = grid_points(&rec, &step)?
                     .into_iter()
                     .filter(|p| p.0 <= a_max)
@@ -469,6 +477,7 @@ fn run_inner(
                             lambda: g,
                             arclength: arc0 + a,
                             residual: None,
+                            linear: None,
                         },
                     )?;
                 }
@@ -636,6 +645,7 @@ fn run_inner(
                                 lambda: g,
                                 arclength: rec.state.arclength,
                                 residual: None,
+                                linear: None,
                             },
                         )?;
                     }
@@ -704,6 +714,7 @@ fn run_inner(
                         lambda: g,
                         arclength: scale * g.abs(),
                         residual: residual.as_deref(),
+                        linear: Some((&u1, l_end)),
                     },
                 )?;
             }
@@ -747,6 +758,7 @@ fn run_inner(
                 lambda: lambda_last,
                 arclength: rec.state.arclength,
                 residual: None,
+                linear: None,
             },
         )?;
     }
@@ -809,6 +821,11 @@ fn run_inner(
         resumed_at_step,
         events: rec.state.events.clone(),
         switched_at: rec.state.switched_at,
+        branch_note: (matches!(scene.branch, Branch::Secondary { .. })
+            && rec.state.switched_at.is_none())
+        .then(|| {
+            "solver.branch = \"secondary\", but the path crossed no bifurcation: it is the primary path".to_string()
+        }),
         contact_switches: rec.state.contact.switches,
         event_factorizations,
         columns: rec.columns.clone(),

@@ -221,6 +221,7 @@ fn row(dae: &FrictionDae, scene: &ShellScene, areas: &[f64], s: &TimeSample) -> 
         lambda: s.lambda,
         arclength: f64::NAN,
         residual: None,
+        linear: None,
     };
     let mut v = vec![s.t, s.lambda];
     v.extend(probe::evaluate(&dae.model, &scene.probes, &state)?);

@@ -212,8 +212,15 @@ pub fn locate<P: ContinuationProblem + ?Sized>(
         let (mut k_lo, mut k_hi) = (lo.kappa, hi.kappa);
         let tol = settings.tol * lo.lambda.abs().max(settings.lambda_scale);
         while (hi.lambda - lo.lambda).abs() > tol && used < settings.max_evaluations {
+            // Several crossings in the bracket (a step over several
+            // critical points): bisection on the count alone until one is
+            // left. The eigenvalue nearest zero may then belong to a later
+            // point, whose sign says nothing of the first (review 4: a
+            // plate whose first step crossed three points reported the
+            // second, at lambda 1.1837, and missed the first at 1.0987).
+            let isolated = lo.count.abs_diff(hi.count) == 1;
             let aligned = dot(&lo.mode, &hi.mode).abs() > 0.9;
-            let secant = aligned && sign_ok(&lo, true) && sign_ok(&hi, false);
+            let secant = isolated && aligned && sign_ok(&lo, true) && sign_ok(&hi, false);
             let a = if secant {
                 let a = (lo.a * k_hi - hi.a * k_lo) / (k_hi - k_lo);
                 // Keep strictly inside the bracket.
@@ -227,7 +234,10 @@ pub fn locate<P: ContinuationProblem + ?Sized>(
             used += 1;
             // Within round-off of the root, the eigenvalue's sign and the
             // inertia disagree: the point is found.
-            if secant && (s.count == target) != sign_ok(&s, true) {
+            if secant
+                && (s.count == target) != sign_ok(&s, true)
+                && dot(&s.mode, &hi.mode).abs() > 0.9
+            {
                 root = Some(s);
                 break;
             }
@@ -248,7 +258,7 @@ pub fn locate<P: ContinuationProblem + ?Sized>(
             }
         }
         evaluations += used;
-        let secant = sign_ok(&lo, true) && sign_ok(&hi, false);
+        let secant = lo.count.abs_diff(hi.count) == 1 && sign_ok(&lo, true) && sign_ok(&hi, false);
         let a = if let Some(r) = &root {
             r.a
         } else if secant {

@@ -425,3 +425,65 @@ fn stability_monitor_in_time_locates_the_euler_load() {
     assert!((hw - 0.5).abs() < 0.05, "half-waves {hw}");
     assert_eq!((b.sticking, b.slipping), (0, 0));
 }
+
+/// A plate a/b = 1.5 under the same compression: k(m) = (m b/a + a/(m b))²
+/// puts its points at lambda = k/4 = 1.0851 (m = 2), 1.1736 (m = 1),
+/// 1.5625 (m = 3), and the path's one first step (to lambda 2) crosses all
+/// three. Review 4: the location took the eigenvalue nearest zero with
+/// three crossings in the bracket and reported only the second point
+/// (1.1837, its bracket the whole step); `branch = "secondary"` then left
+/// at it. Each point must be located, in order, with its half-waves.
+#[test]
+fn a_step_over_three_critical_points_locates_each() {
+    let path = format!(
+        "{}/scenes/verification/plate-buckling.toml",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    let text = std::fs::read_to_string(path)
+        .unwrap()
+        .replace("x = [0.0, 1.0]", "x = [0.0, 1.5]")
+        .replace("divisions = [16, 16]", "divisions = [18, 12]")
+        .replace("point = [0.5, 0.5, 0.0]", "point = [0.75, 0.5, 0.0]");
+    let file = crate::scratch::ScratchFile::with_text("three-points", "p.toml", &text);
+    let sc = load(&file).unwrap();
+    let r = run_loaded(&sc, None, false).unwrap();
+    let found: Vec<(f64, f64, (usize, usize))> = r
+        .events
+        .iter()
+        .map(|e| {
+            (
+                e.lambda,
+                e.half_waves.unwrap_or(0.0),
+                e.negative_pivots.unwrap(),
+            )
+        })
+        .collect();
+    println!("{found:?}");
+    let k = |m: f64| (m / 1.5 + 1.5 / m).powi(2) / 4.0;
+    let want = [(k(2.0), 2.0), (k(1.0), 1.0), (k(3.0), 3.0)];
+    assert_eq!(found.len(), 3, "{found:?}");
+    for (i, ((l, waves, pivots), (l_cf, m))) in found.iter().zip(want).enumerate() {
+        // The 18 x 12 mesh's own error: 1.3 %, 1.0 %, 3.3 %.
+        assert!(
+            (l - l_cf).abs() <= 0.04 * l_cf,
+            "point {i}: {l} against {l_cf}"
+        );
+        assert!(
+            (waves - m).abs() < 0.1,
+            "point {i}: {waves} half-waves against {m}"
+        );
+        assert_eq!(*pivots, (i, i + 1));
+    }
+    // The secondary branch leaves at the first.
+    let mut sec = sc.clone();
+    sec.branch = anm::scene::shell::Branch::Secondary { direction: 1.0 };
+    sec.solver.lambda_end = 1.3;
+    let r = run_loaded(&sec, None, false).unwrap();
+    let at = r.switched_at.expect("a switch");
+    assert!((at - found[0].0).abs() < 1e-9, "switched at {at}");
+    assert!(
+        r.events.iter().all(|e| e.lambda <= at + 1e-9),
+        "{:?}",
+        r.events
+    );
+}
