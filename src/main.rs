@@ -1204,7 +1204,7 @@ fn shell_summary(report: &anm::run::RunReport, out: &std::path::Path) -> ExitCod
     if let Some(l) = report.switched_at {
         println!("  switched to the secondary branch at lambda = {l:.6e}");
     }
-    if let Some(n) = &report.branch_note {
+    for n in &report.notes {
         println!("  note: {n}");
     }
     // The critical points the path crossed (summary.json `events`).

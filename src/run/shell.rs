@@ -80,10 +80,11 @@ pub struct RunReport {
     /// the path left for the bifurcated branch.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub switched_at: Option<f64>,
-    /// With solver.branch = "secondary" and no switch: why the path is the
-    /// primary one.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub branch_note: Option<String>,
+    /// What the user should know of the path beyond its events: a
+    /// secondary branch asked for and not found; the critical points a
+    /// Newton run's steps bracket by their inertia (not located).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub notes: Vec<String>,
     /// Contact pairs that changed side of their law's switch between step
     /// ends, summed over the run (steps.csv `contact_switches`): a row of
     /// nodes touching counts its nodes.
@@ -152,6 +153,9 @@ struct RunCheckpoint {
     /// The scene file (absolute) and its text: a resume refuses a changed scene.
     scene_file: PathBuf,
     scene_text: String,
+    /// ShellScene::mesh_digest at the start.
+    #[serde(default)]
+    mesh_digest: Option<String>,
     path: Checkpoint,
     recorder: RecorderState,
 }
@@ -217,6 +221,7 @@ pub fn resume(out_dir: &Path, progress: bool) -> Result<RunReport> {
         });
     }
     let scene = load(&cp.scene_file)?;
+    scene.check_mesh_digest(&cp.mesh_digest)?;
     run_inner(&scene, Some(out_dir), progress, Some(cp))
 }
 
@@ -345,6 +350,7 @@ fn run_inner(
     let wall_before = rec.state.wall_s_before;
     let scene_file = std::fs::canonicalize(&scene.file).unwrap_or(scene.file.clone());
     let scene_text = &scene.text;
+    let mesh_digest = scene.mesh_digest();
     let bar = progress_bar(progress);
     let show = |lambda: f64, stats: &Stats, what: &str| {
         if let Some(b) = &bar {
@@ -385,6 +391,7 @@ fn run_inner(
     let mut grid_stats = Stats::default();
     let far_skipped = model.search_distance.is_finite() && !model.pairs.is_empty();
     let method_name;
+    let mut newton_brackets: Vec<String> = vec![];
     let mut event_factorizations = 0;
     let path_start = Instant::now();
     let (stop, stats, last): (PathStop, Stats, (Vec<f64>, f64)) = match &scene.method {
@@ -553,6 +560,7 @@ fn run_inner(
                 rec.checkpoint(&RunCheckpointRef {
                     scene_file: &scene_file,
                     scene_text,
+                    mesh_digest: &mesh_digest,
                     path: &path.checkpoint(),
                     recorder: &rec.state,
                 })?;
@@ -600,6 +608,8 @@ fn run_inner(
             let grid: Vec<f64> = (1..=n_grid).map(|i| i as f64 * d).collect();
             let mut prev = (zero.clone(), 0.0);
             let mut count = 0usize;
+            let mut inertia: Option<usize> = None;
+            let brackets = &mut newton_brackets;
             // The engine holds the model; probes read a second instance.
             let mut view = build_model(scene)?;
             view.length_scale = scene.length_scale;
@@ -620,6 +630,19 @@ fn run_inner(
                     let du: Vec<f64> = u.iter().zip(&prev.0).map(|(a, b)| a - b).collect();
                     rec.state.arclength += chord(m, &du, lambda - prev.1, ncfg.lambda_end.abs());
                     count += 1;
+                    // The inertia brackets critical points between steps
+                    // (review 4: steps.csv showed 1 negative pivot past
+                    // P_cr and the run said nothing).
+                    let now = stats.linear.negative_pivots;
+                    if let (Some(a), Some(b)) = (inertia, now)
+                        && a != b
+                    {
+                        brackets.push(format!(
+                            "negative pivots {a} -> {b} between lambda = {:.6e} and {lambda:.6e}: a critical point the Newton steps bracket but do not locate (solver.method = \"anm\" or `anm buckle` locates it)",
+                            prev.1
+                        ));
+                    }
+                    inertia = now.or(inertia);
                     let contact_switches = rec.state.contact.update(&m.events(u, lambda)?);
                     rec.step(&StepRow {
                         step: count,
@@ -821,11 +844,13 @@ fn run_inner(
         resumed_at_step,
         events: rec.state.events.clone(),
         switched_at: rec.state.switched_at,
-        branch_note: (matches!(scene.branch, Branch::Secondary { .. })
-            && rec.state.switched_at.is_none())
-        .then(|| {
-            "solver.branch = \"secondary\", but the path crossed no bifurcation: it is the primary path".to_string()
-        }),
+        notes: {
+            let mut notes = newton_brackets;
+            if matches!(scene.branch, Branch::Secondary { .. }) && rec.state.switched_at.is_none() {
+                notes.push("solver.branch = \"secondary\", but the path crossed no bifurcation: it is the primary path".into());
+            }
+            notes
+        },
         contact_switches: rec.state.contact.switches,
         event_factorizations,
         columns: rec.columns.clone(),
@@ -1025,6 +1050,7 @@ fn record_event(rec: &mut Recorder, model: &ShellModel, e: Event) -> Result<Even
 struct RunCheckpointRef<'a> {
     scene_file: &'a Path,
     scene_text: &'a str,
+    mesh_digest: &'a Option<String>,
     path: &'a Checkpoint,
     recorder: &'a RecorderState,
 }

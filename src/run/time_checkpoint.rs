@@ -19,6 +19,9 @@ pub struct TimeCheckpoint {
     run: String,
     scene_file: PathBuf,
     scene_text: String,
+    /// ShellScene::mesh_digest at the start.
+    #[serde(default)]
+    mesh_digest: Option<String>,
     /// Seconds the run took up to its interruption.
     pub wall_s: f64,
     pub stats: TimeStats,
@@ -33,6 +36,7 @@ impl TimeCheckpoint {
             run: IN_TIME.into(),
             scene_file: scene.file.clone(),
             scene_text: crate::scene::read(&scene.file)?,
+            mesh_digest: scene.mesh_digest(),
             wall_s,
             stats: run.stats.clone(),
             samples: run.samples.clone(),
@@ -105,6 +109,8 @@ impl TimeCheckpoint {
                 problem: "changed since the interrupted run started: a resumed run must solve the same scene".into(),
             });
         }
-        crate::scene::shell::load(&self.scene_file)
+        let scene = crate::scene::shell::load(&self.scene_file)?;
+        scene.check_mesh_digest(&self.mesh_digest)?;
+        Ok(scene)
     }
 }

@@ -620,3 +620,31 @@ fn buckle_mode_counts_and_locate_increments_out_of_range_are_rejected() {
         &["buckle-modes.toml", "--locate", "at most 1e6"],
     );
 }
+
+/// A resumed run refuses a mesh file edited since the run started (review
+/// 4: it went on with the new mesh); the checkpoint holds its digest.
+#[test]
+fn a_changed_mesh_file_is_named_on_resume() {
+    let mesh = tmp("digest.msh");
+    std::fs::copy(mesh_path(), &mesh).unwrap();
+    let s = scene("digest.toml", &mesh, &[]);
+    let sc = load(&s).unwrap();
+    let before = sc.mesh_digest();
+    assert!(before.is_some());
+    sc.check_mesh_digest(&before).expect("the same mesh");
+    let mut text = std::fs::read(&*mesh).unwrap();
+    let at = text.iter().rposition(|&b| b == b'0').unwrap();
+    text[at] = b'1';
+    std::fs::write(&*mesh, text).unwrap();
+    expect_err(
+        sc.check_mesh_digest(&before),
+        &["digest.toml", "mesh.file", "changed since the run started"],
+    );
+    // Built-in meshes have none.
+    let built_in = anm::scene::shell::load(std::path::Path::new(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/scenes/verification/plate-buckling.toml"
+    )))
+    .unwrap();
+    assert_eq!(built_in.mesh_digest(), None);
+}

@@ -487,3 +487,37 @@ fn a_step_over_three_critical_points_locates_each() {
         r.events
     );
 }
+
+/// The Newton baseline does not locate critical points, but its steps'
+/// inertia brackets them, and the run says so (review 4: steps.csv showed
+/// one negative pivot past P_cr and the run was silent). The Euler
+/// column's point, lambda = 1 by the closed form, lies in the bracket.
+#[test]
+fn newton_runs_name_the_critical_points_their_steps_bracket() {
+    let path = format!(
+        "{}/scenes/verification/euler-column.toml",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    let text = std::fs::read_to_string(path).unwrap().replace(
+        "order = 20\neps = 1e-8\nlambda_end = 2.0",
+        "method = \"newton\"\nlambda_end = 1.5",
+    );
+    let file = crate::scratch::ScratchFile::with_text("newton-bracket", "c.toml", &text);
+    let r = run_loaded(&load(&file).unwrap(), None, false).unwrap();
+    assert!(r.events.is_empty());
+    println!("{:?}", r.notes);
+    assert_eq!(r.notes.len(), 1, "{:?}", r.notes);
+    let note = &r.notes[0];
+    assert!(note.contains("negative pivots 0 -> 1"), "{note}");
+    let words: Vec<&str> = note
+        .split("between lambda = ")
+        .nth(1)
+        .unwrap()
+        .split_whitespace()
+        .collect();
+    let numbers: Vec<f64> = [words[0], words[2].trim_end_matches(':')]
+        .iter()
+        .map(|w| w.parse().unwrap())
+        .collect();
+    assert!(numbers[0] <= 1.0 && 1.0 <= numbers[1] * 1.01, "{numbers:?}");
+}
