@@ -179,6 +179,7 @@ enum Command {
     /// with output.tangent_matrix = true) with one backend: analysis, numeric
     /// factorization (best of --repeat), one solve, factor entries, backward
     /// error, peak memory of the process. One JSON line on stdout.
+    /// Duplicate entries of the file are summed (as SciPy's mmread does).
     Factor {
         matrix: PathBuf,
         /// auto (from the matrix's symmetry), ldlt, lblt or lu.
@@ -456,6 +457,9 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
             };
             if threads == 0 {
                 anyhow::bail!("--threads: must be >= 1");
+            }
+            if repeat == 0 {
+                anyhow::bail!("--repeat: must be >= 1");
             }
             let report = anm::study::factor::run(&matrix, choice, threads, repeat)?;
             println!("{}", serde_json::to_string(&report)?);
@@ -1115,13 +1119,20 @@ fn time_summary(r: &anm::run::shell_time::TimeReport, out: &std::path::Path) -> 
     }
     for e in &r.events {
         println!(
-            "  critical point ({} tangent, {}): t = {:.6e} s, lambda = {:.6e} (between outputs {} and {}; negative pivots {} -> {}), {}",
+            "  critical point ({} tangent, {}): t = {:.6e} s, lambda = {:.6e} (between outputs {:.6e} and {:.6e} s{}; negative pivots {} -> {}), {}",
             e.tangent,
             e.detected_by,
             e.t,
             e.lambda,
-            e.bracket[0],
-            e.bracket[1],
+            e.outputs[0],
+            e.outputs[1],
+            match e.restarts {
+                0 => String::new(),
+                n => format!(
+                    ", located in [{:.9e}, {:.9e}] s by {n} restarts",
+                    e.bracket[0], e.bracket[1]
+                ),
+            },
             e.negative_pivots[0],
             e.negative_pivots[1],
             e.mode.as_deref().unwrap_or("")

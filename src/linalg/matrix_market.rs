@@ -85,6 +85,9 @@ pub fn read(path: &Path) -> Result<SparseMatrix, String> {
                         "size line: expected `n n entries` of a square matrix",
                     ));
                 }
+                if v[0] == 0 {
+                    return Err(bad(i, "size line: an empty matrix (n = 0)"));
+                }
                 // Each entry fills at most two rows (one, or its mirror of a
                 // symmetric matrix): with fewer, a row is empty and the
                 // matrix singular, whatever its values. Refused here, before
@@ -185,6 +188,16 @@ mod tests {
                 "huge",
                 "%%MatrixMarket matrix coordinate real symmetric\n1000000000 1000000000 1\n1 1 4.0\n",
                 "line 2: size line: 1 entries cannot fill 1000000000 rows",
+            ),
+            (
+                "empty",
+                "%%MatrixMarket matrix coordinate real symmetric\n0 0 0\n",
+                "line 2: size line: an empty matrix",
+            ),
+            (
+                "nan",
+                "%%MatrixMarket matrix coordinate real symmetric\n1 1 1\n1 1 NaN\n",
+                "line 3: entry (1, 1) is NaN",
             ),
             (
                 "row",

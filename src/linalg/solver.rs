@@ -365,6 +365,10 @@ impl LinearSolver {
                     self.last = Some(backend);
                     return Ok((f, b.map(|_| x)));
                 }
+                Ok((f, _)) if f.backward_error.is_nan() => reasons.push(format!(
+                    "{}: the solve is not finite (a singular matrix)",
+                    backend.name()
+                )),
                 Ok((f, _)) => reasons.push(format!(
                     "{}: backward error {:.1e} > {BACKWARD_ERROR_LIMIT:e}",
                     backend.name(),

@@ -296,7 +296,15 @@ impl SymmetricFactor {
                         Default::default(),
                     )
                     .map(|_| (vec![], vec![], vec![]))
-                    .map_err(|e| format!("LDLᵀ: {e:?}"))
+                    .map_err(|e| match e {
+                        // faer counts in its fill-reducing order, from 0.
+                        faer::linalg::cholesky::ldlt::factor::LdltError::ZeroPivot { index } => {
+                            format!(
+                                "LDLᵀ: a zero pivot at elimination step {} (of the fill-reducing order): singular, or indefinite beyond LDLᵀ without pivoting",
+                                index + 1
+                            )
+                        }
+                    })
             }
             Pivoting::BunchKaufman => {
                 let req = sym

@@ -316,6 +316,9 @@ pub struct TimeEvent {
     pub lambda: f64,
     /// The bracket: the two outputs, or after [`locate`] its final one.
     pub bracket: [f64; 2],
+    /// The times of the two outputs the event was detected between (where
+    /// `kappa` and `negative_pivots` are read).
+    pub outputs: [f64; 2],
     /// Restarts spent by [`locate`] (0: not located, the interpolation
     /// between the outputs).
     pub restarts: usize,
@@ -361,6 +364,7 @@ pub fn events(stability: &[SampleStability]) -> Vec<TimeEvent> {
                 t,
                 lambda,
                 bracket: samples.map(|k| stability[k].t),
+                outputs: samples.map(|k| stability[k].t),
                 restarts: 0,
                 samples,
                 negative_pivots: [na, nb],

@@ -35,11 +35,7 @@ pub struct FactorReport {
 
 /// Factors `path` `repeat` times with `choice` on `threads` threads.
 pub fn run(path: &Path, choice: Choice, threads: usize, repeat: usize) -> Result<FactorReport> {
-    let fail = |problem: String| Error::Invalid {
-        file: path.to_path_buf(),
-        key: "matrix".into(),
-        problem,
-    };
+    let fail = |problem: String| Error::study("factor", path.display().to_string(), problem);
     let a = matrix_market::read(path).map_err(fail)?;
     let mut solver = LinearSolver::new(choice).with_threads(threads);
     let mut best = f64::INFINITY;
