@@ -83,6 +83,24 @@ pub fn build_model(scene: &ShellScene) -> Result<ShellModel> {
             _ => unreachable!("dead_pattern covers every dead load"),
         }
     }
+    // The residual norms square forces (see the scene's E t L check).
+    let size = scene.mesh.size();
+    let follower = m
+        .pressures
+        .iter()
+        .map(|p| p.pressure.abs() * size * size)
+        .chain(m.follower.iter().map(|c| c.moment.norm() / size))
+        .fold(0.0, f64::max);
+    let loads = m.dead.iter().fold(follower, |a, x| a.max(x.abs()));
+    if !(loads <= 1e150) {
+        return Err(Error::Invalid {
+            file: scene.file.clone(),
+            key: "load".into(),
+            problem: format!(
+                "the loads reach {loads:.3e} (force): squared in the residual norms they leave the range of a double; rescale the units"
+            ),
+        });
+    }
     if let Some(ct) = &scene.contact {
         let shapes = scene.obstacles.iter().map(|o| o.shape.clone()).collect();
         m.set_contact(shapes, &ct.nodes, ct.k, ct.eta, ct.search_distance)

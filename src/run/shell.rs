@@ -688,9 +688,13 @@ fn run_inner(
         Method::Linear => {
             method_name = "linear";
             let mut stats = Stats::default();
+            let clock = Instant::now();
             let (k, rl) = model.tangent(&zero, 0.0)?;
+            stats.assembly_s += clock.elapsed().as_secs_f64();
             let f = crate::series::continuation::factorize(&mut grid_lu, &k, &mut stats, 0, 0.0)?;
+            let clock = Instant::now();
             let u1 = f.solve(&rl.iter().map(|x| -x).collect::<Vec<_>>());
+            stats.solve_s += clock.elapsed().as_secs_f64();
             stats.solves += 1;
             stats.steps = 1;
             if let Some(i) = u1.iter().position(|x| !x.is_finite()) {

@@ -643,6 +643,28 @@ pub fn load(path: &Path) -> Result<ShellScene> {
     let mesh = mesh(&c, path, &raw.mesh, &obstacles)?;
     let directors = mesh.directors()?;
     let size = mesh.size();
+    // Ranges a double can carry (review 4: t = 1e-200 m stopped on a
+    // "singular EAS matrix", E = 1e300 ran to a zero reaction). The
+    // bending stiffness is (t / L)² of the membrane one: below 1e-16 it is
+    // lost in the membrane's round-off. The residual norms square forces,
+    // of the order of E t L: they must stay within about 1e±150.
+    if thickness < 1e-8 * size {
+        return Err(c.fail(
+            "shell.thickness",
+            format!(
+                "{thickness:e} is below 1e-8 of the model's size {size:.3e}: the bending stiffness, (t/L)² of the membrane one, would be lost in its round-off"
+            ),
+        ));
+    }
+    let force_scale = young * thickness * size;
+    if !(1e-150..=1e150).contains(&force_scale) {
+        return Err(c.fail(
+            "material.young",
+            format!(
+                "E t L = {force_scale:.3e} (the shell's force scale) is outside [1e-150, 1e150]: squared in the residual norms it leaves the range of a double; rescale the units"
+            ),
+        ));
+    }
     let tol = match raw.mesh.node_tolerance {
         Some(t) => c.positive("mesh.node_tolerance", t)?,
         None => 1e-9 * size,

@@ -648,3 +648,36 @@ fn a_changed_mesh_file_is_named_on_resume() {
     .unwrap();
     assert_eq!(built_in.mesh_digest(), None);
 }
+
+/// Values out of what a double carries (review 4): t = 1e-200 m stopped
+/// on a "singular EAS matrix" naming no key, E = 1e300 Pa ran to a zero
+/// reaction under full load, a 1e300 N load stopped at lambda = 0.
+#[test]
+fn values_beyond_a_double_s_range_name_their_key() {
+    for (name, old, new, needles) in [
+        (
+            "thin.toml",
+            "thickness = 0.8e-3",
+            "thickness = 1e-200",
+            vec!["shell.thickness", "below 1e-8 of the model's size"],
+        ),
+        (
+            "stiff.toml",
+            "young = 200e9",
+            "young = 1e300",
+            vec!["material.young", "E t L = "],
+        ),
+    ] {
+        let s = scene(name, &mesh_path(), &[(old, new)]);
+        expect_err(load(&s), &needles);
+    }
+    let s = scene(
+        "huge-load.toml",
+        &mesh_path(),
+        &[("force = [0.0, 0.0, 10.0]", "force = [0.0, 0.0, 1e300]")],
+    );
+    expect_err(
+        load(&s).and_then(|sc| anm::run::build::build_model(&sc).map(|_| ())),
+        &["huge-load.toml", "`load`", "the loads reach 1.000e300"],
+    );
+}
