@@ -329,7 +329,7 @@ fn run_inner(
         return Err(Error::Invalid {
             file: scene.file.clone(),
             key: "friction".into(),
-            problem: "a shell scene with [friction] is a problem in time: `anm run` solves it (run::shell_time); the static path in lambda and the studies built on it (audit, bench, stress, buckle) do not take friction".into(),
+            problem: "a shell scene with [friction] is a problem in time: `anm run` solves it (run::shell_time); the static path in lambda does not take friction, nor do `anm bench` and `anm stress` (`anm audit` and `anm buckle --time` have forms in time)".into(),
         });
     }
     let start = Instant::now();

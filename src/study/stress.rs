@@ -531,7 +531,18 @@ impl StressSweep {
             let path = scenes.join(format!("{name}.toml"));
             let text = crate::scene::read(&path)?;
             match crate::scene::kind(&path, &text)? {
-                Kind::Shell => shells.push((name.clone(), crate::scene::shell::load(&path)?)),
+                Kind::Shell => {
+                    let shell = crate::scene::shell::load(&path)?;
+                    if shell.friction.is_some() {
+                        // Its axes (eta, K, order) vary the static path.
+                        return Err(Error::Invalid {
+                            file: path,
+                            key: "friction".into(),
+                            problem: "`anm stress` varies the static path in lambda of a shell scene (eta, K, order); a scene with [friction] runs in time: stress it with `anm audit` (its sweeps in time) or runs of its own".into(),
+                        });
+                    }
+                    shells.push((name.clone(), shell))
+                }
                 kind => friction.push(crate::scene::friction::load(&path, &text, kind)?),
             }
             inputs.push(path);

@@ -310,7 +310,7 @@ pub fn markdown(scene: &ShellScene, rows: &[TimeAuditRow]) -> String {
     s
 }
 
-/// Writes audit.md and audit.csv into `dir`.
+/// Writes audit.md, audit.csv and audit.svg into `dir`.
 pub fn write(scene: &ShellScene, rows: &[TimeAuditRow], dir: &Path) -> Result<()> {
     create_dir(dir)?;
     let md = dir.join("audit.md");
@@ -365,7 +365,84 @@ pub fn write(scene: &ShellScene, rows: &[TimeAuditRow], dir: &Path) -> Result<()
     w.flush().map_err(|source| Error::Io {
         file: file.clone(),
         source,
-    })
+    })?;
+    plot(scene, rows, &dir.join("audit.svg"))
+}
+
+/// audit.svg: per swept parameter, the deviations at t_end and over the
+/// trajectory, and the steps and factorizations, against its value (runs
+/// that did not reach t_end left out).
+fn plot(scene: &ShellScene, rows: &[TimeAuditRow], path: &Path) -> Result<()> {
+    use crate::output::plot::{Curve, Panel, draw};
+    let stem = scene
+        .file
+        .file_stem()
+        .map(|s| s.to_string_lossy().to_string())
+        .unwrap_or_default();
+    let key = key_name(scene);
+    let labels = [
+        format!("{key}(t_end)"),
+        "rn_total(t_end)".to_string(),
+        "slip_area(t_end)".to_string(),
+        format!("{key} trajectory (max over t)"),
+        "steps".to_string(),
+        "factorizations".to_string(),
+    ];
+    let swept: Vec<(&str, String, String, String)> = ["omega", "zeta", "eta", "penalty"]
+        .into_iter()
+        .filter(|p| rows.iter().any(|r| r.parameter == *p))
+        .map(|p| {
+            let unit = match p {
+                "omega" => "omega (-)".to_string(),
+                "penalty" => format!("K ({}/{})", scene.units.force, scene.units.length),
+                other => format!("{other} ({})", scene.units.force),
+            };
+            (
+                p,
+                format!("{stem}: deviation from the least regularized run, {p} swept"),
+                format!("{stem}: cost, {p} swept"),
+                unit,
+            )
+        })
+        .collect();
+    let mut panels = vec![];
+    for (p, dev_title, cost_title, unit) in &swept {
+        let curve = |k: usize, f: &dyn Fn(&TimeAuditRow) -> f64| Curve {
+            label: &labels[k],
+            points: rows
+                .iter()
+                .filter(|r| r.parameter == *p && r.stop != "error")
+                .map(|r| (r.value, f(r)))
+                .filter(|(_, y)| y.is_finite())
+                .collect(),
+        };
+        panels.push(Panel {
+            title: dev_title,
+            x_label: unit,
+            y_label: "deviation (relative)",
+            curves: vec![
+                curve(0, &|r| r.key_deviation),
+                curve(1, &|r| r.contact_deviation),
+                curve(2, &|r| r.slip_area_deviation),
+                curve(3, &|r| r.trajectory_deviation),
+            ],
+            log: (true, true),
+        });
+        panels.push(Panel {
+            title: cost_title,
+            x_label: unit,
+            y_label: "count (-)",
+            curves: vec![
+                curve(4, &|r| r.steps as f64),
+                curve(5, &|r| r.factorizations as f64),
+            ],
+            log: (true, false),
+        });
+    }
+    if panels.is_empty() {
+        return Ok(());
+    }
+    draw(path, &panels)
 }
 
 /// The audit in time as a sweep (`anm audit` on a shell scene with
