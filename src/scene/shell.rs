@@ -1712,6 +1712,15 @@ fn friction(
                 format!("[start, end] = [{start:?}, {end:?}] must have start <= end and start < friction.t_end = {t_end:?}"),
             ));
         }
+        if start > 0.0 && end == start {
+            // A jump at t = start: the path in time is not smooth there,
+            // and the series cannot cross it (review 4: a step collapse
+            // blamed on friction).
+            return Err(c.fail(
+                key,
+                format!("[{start:?}, {end:?}] is a jump at t = {start:?}: the path in time must be smooth; give end > start (a short rise), or [0, 0] for full from the start"),
+            ));
+        }
         Ok(Ramp { start, end })
     };
     let load = ramp("friction.load_ramp", fr.load_ramp)?;

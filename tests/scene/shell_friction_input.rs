@@ -82,6 +82,14 @@ fn bad_friction_values_name_the_key() {
             "load_ramp = [0.5, 0.2]",
             "friction.load_ramp",
         ),
+        // Review 4: a jump at 0.3 s ended in a step collapse blamed on
+        // friction.
+        (
+            "ramp-jump.toml",
+            "load_ramp = [0.0, 0.5]",
+            "load_ramp = [0.3, 0.3]",
+            "friction.load_ramp",
+        ),
         (
             "ramp-late.toml",
             "motion_ramp = [0.5, 0.6]",
