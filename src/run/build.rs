@@ -311,40 +311,33 @@ fn check_rigid_modes(scene: &ShellScene, contact: &[(usize, Vec3)]) -> Result<()
             }
         }
     };
+    // Mode j's displacement of node n (translation along e_j for j < 3,
+    // rotation about e_{j-3} through c, scaled by the size) and its
+    // director's turn.
+    let unit = |j: usize| {
+        let mut e = Vec3::zeros();
+        e[j % 3] = 1.0;
+        e
+    };
+    let moves = |j: usize, n: usize| match j < 3 {
+        true => unit(j),
+        false => unit(j).cross(&(x0[n] - c)) / size,
+    };
+    let turns = |j: usize, n: usize| match j < 3 {
+        true => Vec3::zeros(),
+        false => unit(j).cross(&scene.directors[n]),
+    };
     for &(node, n) in contact {
-        let mut row = [0.0; 6];
-        for (j, r) in row.iter_mut().enumerate() {
-            let mut e = Vec3::zeros();
-            e[j % 3] = 1.0;
-            let motion = if j < 3 {
-                e
-            } else {
-                e.cross(&(x0[node] - c)) / size
-            };
-            *r = n.dot(&motion) / n.norm();
-        }
-        add(row);
+        add(std::array::from_fn(|j| n.dot(&moves(j, node)) / n.norm()));
     }
     for d in scene.fixed.keys() {
         let k = d.component.offset() % 3;
-        let mut row = [0.0; 6];
-        for (j, r) in row.iter_mut().enumerate() {
-            let mut e = Vec3::zeros();
-            e[j % 3] = 1.0;
-            let motion = if d.component.is_displacement() {
-                if j < 3 {
-                    e
-                } else {
-                    e.cross(&(x0[d.node] - c)) / size
-                }
-            } else if j < 3 {
-                Vec3::zeros()
-            } else {
-                e.cross(&scene.directors[d.node])
-            };
-            *r = motion[k];
-        }
-        add(row);
+        add(std::array::from_fn(|j| {
+            match d.component.is_displacement() {
+                true => moves(j, d.node)[k],
+                false => turns(j, d.node)[k],
+            }
+        }));
     }
     let eig = SymmetricEigen::new(g);
     let top = eig.eigenvalues.max().max(1.0);

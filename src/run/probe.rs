@@ -44,15 +44,20 @@ pub fn linear_residual(
         model.residual_full(&model.expand(&u, l), l)
     };
     let (r0, r1, r2, r3) = (at(0.0)?, at(1.0)?, at(2.0)?, at(3.0)?);
-    // Lagrange derivative at 0 of the cubic through 0, h, 2h, 3h.
     let slope = r0
         .iter()
         .zip(&r1)
         .zip(&r2)
         .zip(&r3)
-        .map(|(((a, b), c), d)| (-11.0 * a + 18.0 * b - 9.0 * c + 2.0 * d) / (6.0 * h))
+        .map(|(((&a, &b), &c), &d)| slope_at_zero([a, b, c, d], h))
         .collect();
     Ok((r0, slope))
+}
+
+/// The derivative at 0 of the cubic through (k h, f_k), k = 0..3
+/// (Lagrange).
+fn slope_at_zero(f: [f64; 4], h: f64) -> f64 {
+    (-11.0 * f[0] + 18.0 * f[1] - 9.0 * f[2] + 2.0 * f[3]) / (6.0 * h)
 }
 
 /// The tension across `cut` of a linear analysis at lambda: lambda times
@@ -77,8 +82,7 @@ pub fn linear_tension(
         let u: Vec<f64> = u1.iter().map(|x| l * x).collect();
         super::section::tension(model, cut, &model.expand(&u, l))
     };
-    let slope = (-11.0 * at(0.0) + 18.0 * at(1.0) - 9.0 * at(2.0) + 2.0 * at(3.0)) / (6.0 * h);
-    lambda * slope
+    lambda * slope_at_zero([at(0.0), at(1.0), at(2.0), at(3.0)], h)
 }
 
 /// Contact of one pair at a state.

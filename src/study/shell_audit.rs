@@ -582,30 +582,49 @@ pub fn write(scene: &ShellScene, rows: &[ShellAuditRow], dir: &Path) -> Result<(
                 .map(|r| (r.value, f(r)))
                 .collect(),
         };
-        panels.push(Panel {
-            title: dev_title,
-            x_label: unit,
-            y_label: "deviation (relative)",
-            curves: vec![
+        panels.extend(swept_panels(
+            (dev_title, cost_title),
+            unit,
+            vec![
                 curve(0, &|r| r.key_deviation),
                 curve(1, &|r| r.contact_deviation),
                 curve(2, &|r| r.trajectory_deviation),
             ],
-            log: (true, true),
-        });
-        panels.push(Panel {
-            title: cost_title,
-            x_label: unit,
-            y_label: "count (-)",
-            curves: vec![
+            vec![
                 curve(3, &|r| r.steps as f64),
                 curve(4, &|r| r.factorizations as f64),
             ],
-            log: (true, false),
-        });
+        ));
     }
     draw(&dir.join("audit.svg"), &panels)?;
     Ok(())
+}
+
+/// The two panels of audit.svg for one swept parameter (shell audits,
+/// static and in time): the deviations against its value (log-log), and
+/// the steps and factorizations (log x).
+pub(crate) fn swept_panels<'a>(
+    (deviation_title, cost_title): (&'a str, &'a str),
+    unit: &'a str,
+    deviations: Vec<Curve<'a>>,
+    costs: Vec<Curve<'a>>,
+) -> [Panel<'a>; 2] {
+    [
+        Panel {
+            title: deviation_title,
+            x_label: unit,
+            y_label: "deviation (relative)",
+            curves: deviations,
+            log: (true, true),
+        },
+        Panel {
+            title: cost_title,
+            x_label: unit,
+            y_label: "count (-)",
+            curves: costs,
+            log: (true, false),
+        },
+    ]
 }
 
 #[cfg(test)]

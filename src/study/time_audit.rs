@@ -373,7 +373,7 @@ pub fn write(scene: &ShellScene, rows: &[TimeAuditRow], dir: &Path) -> Result<()
 /// trajectory, and the steps and factorizations, against its value (runs
 /// that did not reach t_end left out).
 fn plot(scene: &ShellScene, rows: &[TimeAuditRow], path: &Path) -> Result<()> {
-    use crate::output::plot::{Curve, Panel, draw};
+    use crate::output::plot::{Curve, draw};
     let stem = scene
         .file
         .file_stem()
@@ -416,28 +416,20 @@ fn plot(scene: &ShellScene, rows: &[TimeAuditRow], path: &Path) -> Result<()> {
                 .filter(|(_, y)| y.is_finite())
                 .collect(),
         };
-        panels.push(Panel {
-            title: dev_title,
-            x_label: unit,
-            y_label: "deviation (relative)",
-            curves: vec![
+        panels.extend(super::shell_audit::swept_panels(
+            (dev_title, cost_title),
+            unit,
+            vec![
                 curve(0, &|r| r.key_deviation),
                 curve(1, &|r| r.contact_deviation),
                 curve(2, &|r| r.slip_area_deviation),
                 curve(3, &|r| r.trajectory_deviation),
             ],
-            log: (true, true),
-        });
-        panels.push(Panel {
-            title: cost_title,
-            x_label: unit,
-            y_label: "count (-)",
-            curves: vec![
+            vec![
                 curve(4, &|r| r.steps as f64),
                 curve(5, &|r| r.factorizations as f64),
             ],
-            log: (true, false),
-        });
+        ));
     }
     if panels.is_empty() {
         return Ok(());
