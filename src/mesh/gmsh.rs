@@ -76,7 +76,9 @@ pub fn read(path: &Path) -> Result<Mesh> {
         file: path.to_path_buf(),
         source: e,
     })?;
-    parse(path, &text)
+    let mut mesh = parse(path, &text)?;
+    mesh.digest = Some(super::digest(text.as_bytes()));
+    Ok(mesh)
 }
 
 /// Parses .msh 4.1 text; `path` names the source in errors.
@@ -308,6 +310,7 @@ pub fn parse(path: &Path, text: &str) -> Result<Mesh> {
         surface_groups,
         grid: None,
         notes: vec![],
+        digest: None,
     })
 }
 

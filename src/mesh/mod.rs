@@ -50,6 +50,18 @@ pub struct Mesh {
     /// What a built-in mesher worked out that the user may want to see
     /// (`anm check` prints it): e.g. a strip's length and wrap angles.
     pub notes: Vec<String>,
+    /// FNV-1a digest of the bytes the mesh was read from; None for a
+    /// built-in mesh. Taken when the file is read, so that a resumed run
+    /// compares the mesh it solved, not the file at the interruption.
+    pub digest: Option<String>,
+}
+
+/// FNV-1a (64 bits) of `bytes`, as 16 hexadecimal digits.
+pub fn digest(bytes: &[u8]) -> String {
+    let h = bytes.iter().fold(0xcbf2_9ce4_8422_2325u64, |h, &b| {
+        (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3)
+    });
+    format!("{h:016x}")
 }
 
 /// The node and element layout of a structured mesh (see

@@ -95,6 +95,7 @@ pub fn grid(label: &str, nx: usize, ny: usize, f: impl Fn(usize, usize) -> (Vec3
         surface_groups,
         grid: Some(super::Grid { nx, ny }),
         notes: vec![],
+        digest: None,
     }
 }
 

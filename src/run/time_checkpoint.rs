@@ -35,7 +35,7 @@ impl TimeCheckpoint {
         Ok(Self {
             run: IN_TIME.into(),
             scene_file: scene.file.clone(),
-            scene_text: crate::scene::read(&scene.file)?,
+            scene_text: scene.text.clone(),
             mesh_digest: scene.mesh_digest(),
             wall_s,
             stats: run.stats.clone(),

@@ -489,19 +489,17 @@ pub struct ShellScene {
 }
 
 impl ShellScene {
-    /// A digest of the mesh file's bytes (FNV-1a, 64 bits); None for a
-    /// built-in mesh. A resumed run refuses a mesh file changed since the
-    /// run started (review 4: it went on with the new mesh, wrote rows of
-    /// the mixed model and stopped on a residual of 7e2).
+    /// The digest of the mesh file's bytes as they were read with the
+    /// scene ([`crate::mesh::Mesh::digest`]); None for a built-in mesh. A
+    /// resumed run refuses a mesh file changed since the run started
+    /// (review 4: it went on with the new mesh, wrote rows of the mixed
+    /// model and stopped on a residual of 7e2).
     pub fn mesh_digest(&self) -> Option<String> {
-        let bytes = std::fs::read(&self.mesh.file).ok()?;
-        let h = bytes.iter().fold(0xcbf2_9ce4_8422_2325u64, |h, &b| {
-            (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3)
-        });
-        Some(format!("{h:016x}"))
+        self.mesh.digest.clone()
     }
 
-    /// The error of a resumed run whose mesh file changed, if it did.
+    /// The error of a resumed run whose mesh file changed, if it did
+    /// (`self` is the scene loaded for the resume).
     pub fn check_mesh_digest(&self, recorded: &Option<String>) -> Result<()> {
         if recorded.is_some() && *recorded != self.mesh_digest() {
             return Err(crate::error::Error::Invalid {

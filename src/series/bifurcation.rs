@@ -258,6 +258,13 @@ pub fn locate<P: ContinuationProblem + ?Sized>(
             }
         }
         evaluations += used;
+        // The bracket the event reports: the inertia changes inside it.
+        let mut bracket = (hi.lambda - lo.lambda).abs();
+        if let Some(r) = &root {
+            let (width, probes) = close_bracket(problem, step, lu, r, &lo, &hi, target)?;
+            bracket = width;
+            evaluations += probes;
+        }
         let secant = lo.count.abs_diff(hi.count) == 1 && sign_ok(&lo, true) && sign_ok(&hi, false);
         let a = if let Some(r) = &root {
             r.a
@@ -283,7 +290,7 @@ pub fn locate<P: ContinuationProblem + ?Sized>(
             step: step.index,
             a,
             negative_pivots: Some((lo.count, hi.count)),
-            bracket: (hi.lambda - lo.lambda).abs(),
+            bracket,
             kappa: near.kappa,
             factorizations: evaluations,
             mode: near.mode.clone(),
@@ -312,6 +319,45 @@ pub fn locate<P: ContinuationProblem + ?Sized>(
         });
     }
     Ok(events)
+}
+
+/// Most probes that close the bracket around a root found by the sign of
+/// kappa (each at four times the distance of the last).
+const CLOSING_PROBES: usize = 4;
+
+/// A root `r` found where kappa's sign and the inertia disagree is within
+/// round-off of the crossing, but the bracket [lo, hi] around it may still
+/// be wide (review 4: 5e-4 in lambda for a point located to 5e-11). The
+/// crossing of the count lies on the side of `r` whose count differs from
+/// `r`'s; probes there at a few times kappa's distance to zero by the
+/// secant slope, |kappa_r| / |dkappa/da|, close a bracket [r, probe] of that
+/// width. Returns its width in lambda (that of the side left open when no
+/// probe closes it) and the probes spent.
+fn close_bracket<P: ContinuationProblem + ?Sized>(
+    problem: &mut P,
+    step: &PathStep,
+    lu: &mut LinearSolver,
+    r: &Sample,
+    lo: &Sample,
+    hi: &Sample,
+    target: usize,
+) -> Result<(f64, usize)> {
+    let far = if r.count == target { hi } else { lo };
+    let slope = ((hi.kappa - lo.kappa) / (hi.a - lo.a)).abs();
+    let room = far.a - r.a;
+    let floor = 64.0 * f64::EPSILON * r.a.abs().max(step.length);
+    let mut distance = (4.0 * r.kappa.abs() / slope).max(floor);
+    let mut probes = 0;
+    while probes < CLOSING_PROBES && distance < 0.5 * room.abs() {
+        let a = r.a + distance.copysign(room);
+        let (_, f, lambda) = factor_at(problem, step, lu, a)?;
+        probes += 1;
+        if f.inertia().map(|i| i.0) != Some(r.count) {
+            return Ok(((lambda - r.lambda).abs(), probes));
+        }
+        distance *= 4.0;
+    }
+    Ok(((far.lambda - r.lambda).abs(), probes))
 }
 
 /// A critical point located without inertia (non-symmetric tangent), in a

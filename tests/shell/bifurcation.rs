@@ -521,3 +521,69 @@ fn newton_runs_name_the_critical_points_their_steps_bracket() {
         .collect();
     assert!(numbers[0] <= 1.0 && 1.0 <= numbers[1] * 1.01, "{numbers:?}");
 }
+
+/// A pinned-pinned column (P_cr = pi² EI / L² per unit lambda; the 40
+/// elements' error 7.8e-4). Its point is found where kappa's sign and the
+/// inertia disagree, within round-off of the crossing, while the bracket
+/// left by the iteration was still 5e-4 wide in lambda (review 4): the
+/// event's `bracket` must be one the inertia changes in, as tight as the
+/// location (1e-9 relative asked of it).
+#[test]
+fn an_event_s_bracket_is_as_tight_as_its_location() {
+    let text = r#"
+[scene]
+kind = "shell"
+units = "m"
+
+[mesh]
+type = "rectangle"
+x = [0.0, 5.0]
+y = [-0.5, 0.5]
+divisions = [40, 1]
+
+[material]
+young = 2e8
+poisson = 0.0
+
+[shell]
+thickness = 0.05
+
+[[fix]]
+group = "s0"
+dofs = ["ux", "uz"]
+
+[[fix]]
+group = "s1"
+dofs = ["uz"]
+
+[[fix]]
+group = "all"
+dofs = ["uy", "wy"]
+
+[[load]]
+group = "s1"
+force = [-411.2335167120566, 0.0, 0.0]
+
+[solver]
+lambda_end = 1.5
+
+[output]
+lambda_step = 0.1
+vtk_every = 0
+"#;
+    let file = crate::scratch::ScratchFile::with_text("pinned-bracket", "c.toml", text);
+    let sc = load(&file).unwrap();
+    let r = run_loaded(&sc, None, false).unwrap();
+    assert_eq!(r.events.len(), 1, "{:?}", r.events);
+    let e = &r.events[0];
+    println!(
+        "lambda {:.12}, bracket {:.1e}, kappa {:?}, {} factorizations",
+        e.lambda, e.bracket, e.kappa, e.factorizations
+    );
+    assert!((e.lambda - 1.0).abs() < 1e-3, "{}", e.lambda);
+    assert!(
+        e.bracket > 0.0 && e.bracket <= 1e-9 * e.lambda,
+        "{}",
+        e.bracket
+    );
+}
