@@ -55,6 +55,7 @@ fn patch() -> Mesh {
         surface_groups: BTreeMap::new(),
         grid: None,
         notes: vec![],
+        digest: None,
     }
 }
 
