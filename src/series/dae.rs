@@ -222,6 +222,12 @@ pub struct ImplicitCounts {
     /// Quasi-Newton iterations of implicit tries, each a consistent
     /// initialization and a series at the try's end point.
     pub iterations: usize,
+    /// Output times solved inside implicit steps (a step retried to end
+    /// before an output time it missed counts the ones it had solved), and
+    /// how many of them were taken from the step's Hermite interpolant (the
+    /// others solved by (I2)).
+    pub output_times: usize,
+    pub hermite_outputs: usize,
 }
 
 /// The tape of a problem: inputs u, v, z, t in that order.
@@ -528,6 +534,8 @@ pub fn run<P: DaeProblem + ?Sized>(
         steps: chooser.accepted,
         rejected: chooser.rejected,
         iterations: chooser.iterations + chooser.output_iterations,
+        output_times: chooser.output_points,
+        hermite_outputs: chooser.hermite_points,
     };
     r
 }

@@ -108,6 +108,16 @@ fn run_against<P: DaeProblem>(
 
 /// Steps and the largest error (step ends and a grid of 301 points).
 fn solve(tau: f64, stepping: Stepping, max_steps: usize) -> (usize, f64, String) {
+    let (steps, err, stop, _) = solve_counted(tau, stepping, max_steps);
+    (steps, err, stop)
+}
+
+/// [`solve`] with the implicit steps' counts.
+fn solve_counted(
+    tau: f64,
+    stepping: Stepping,
+    max_steps: usize,
+) -> (usize, f64, String, dae::ImplicitCounts) {
     // u'(0) = (0 - sin 0)/tau = 0: the exact initial velocity.
     let (r, _, worst) = run_against(
         &Relaxation { tau },
@@ -117,7 +127,7 @@ fn solve(tau: f64, stepping: Stepping, max_steps: usize) -> (usize, f64, String)
         max_steps,
         |t| vec![exact(tau, t)],
     );
-    (r.stats.steps, worst, r.stop)
+    (r.stats.steps, worst, r.stop, r.implicit)
 }
 
 #[test]
@@ -129,14 +139,22 @@ fn implicit_step_follows_the_closed_form_with_steps_independent_of_tau() {
         println!("explicit: tau = {tau:.0e}: {steps} steps, max error {err:.2e}");
         explicit.push(steps);
     }
+    // Output times inside implicit steps, and of them taken from the
+    // Hermite interpolant (its error estimate passed): every one is checked
+    // against the closed form with the rest.
+    let (mut inside, mut hermite) = (0, 0);
     for stepping in [Stepping::Auto, Stepping::Implicit] {
         let mut counts = vec![];
         for tau in [1e-2, 1e-3, 1e-4, 1e-5, 1e-6] {
-            let (steps, err, stop) = solve(tau, stepping, 20_000);
+            let (steps, err, stop, implicit) = solve_counted(tau, stepping, 20_000);
             println!(
-                "{}: tau = {tau:.0e}: {steps} steps, max error {err:.2e} ({stop})",
-                stepping.name()
+                "{}: tau = {tau:.0e}: {steps} steps, max error {err:.2e} ({stop}); output times inside implicit steps {}, from the Hermite interpolant {}",
+                stepping.name(),
+                implicit.output_times,
+                implicit.hermite_outputs
             );
+            inside += implicit.output_times;
+            hermite += implicit.hermite_outputs;
             assert_eq!(stop, "end", "tau {tau:e}");
             assert!(err <= 1e-8, "tau {tau:e}: error {err:e}");
             counts.push(steps);
@@ -171,6 +189,7 @@ fn implicit_step_follows_the_closed_form_with_steps_independent_of_tau() {
             assert!(hi / lo < 3.0, "auto: steps {counts:?}");
         }
     }
+    assert!(hermite > 0 && hermite < inside, "{hermite} of {inside}");
 }
 
 /// Bad input: an unknown `solver.time_step` names the file, the key and
