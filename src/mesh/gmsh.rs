@@ -10,7 +10,9 @@
 //! curve becomes an edge group (its 2-node lines, in file order) and a
 //! physical surface a surface group (its quadrilaterals). Nodes not used by
 //! any quadrilateral are dropped and the others renumbered in order of first
-//! use; a group with a node outside every quadrilateral is an error.
+//! use; a group with a node outside every quadrilateral is an error, as are
+//! a non-finite coordinate, a node tag given twice and a quadrilateral with
+//! the nodes of another.
 
 use super::{Mesh, Vec3};
 use crate::error::{Error, Result};
@@ -92,6 +94,10 @@ pub fn parse(path: &Path, text: &str) -> Result<Mesh> {
     // (dim, entity tag) -> physical tags.
     let mut entity_phys: HashMap<(usize, i64), Vec<i64>> = HashMap::new();
     let mut node_index: HashMap<usize, usize> = HashMap::new();
+    let mut node_lines: HashMap<usize, usize> = HashMap::new();
+    // The sorted nodes of each quadrilateral -> (tag, line): a repeated
+    // element would count its stiffness and loads twice.
+    let mut quad_seen: HashMap<[usize; 4], (usize, usize)> = HashMap::new();
     let mut nodes: Vec<Vec3> = Vec::new();
     let mut quads: Vec<[usize; 4]> = Vec::new();
     let mut quad_lines = Vec::new();
@@ -170,6 +176,21 @@ pub fn parse(path: &Path, text: &str) -> Result<Mesh> {
                     for tag in tags {
                         let c: Vec<f64> = ln.numbers(3)?;
                         let _ = param;
+                        // Rust parses "nan" and "inf": named here, not as
+                        // a zero-area element later (review 5).
+                        if let Some(k) = c[..3].iter().position(|x| !x.is_finite()) {
+                            return Err(ln.err(format!(
+                                "node {tag}: coordinate {} is not finite ({})",
+                                ["x", "y", "z"][k],
+                                c[k]
+                            )));
+                        }
+                        if let Some(&first) = node_lines.get(&tag) {
+                            return Err(ln.err(format!(
+                                "node tag {tag} appears twice (first at line {first})"
+                            )));
+                        }
+                        node_lines.insert(tag, ln.line);
                         node_index.insert(tag, nodes.len());
                         nodes.push(Vec3::new(c[0], c[1], c[2]));
                     }
@@ -202,6 +223,14 @@ pub fn parse(path: &Path, text: &str) -> Result<Mesh> {
                             })?);
                         }
                         if ty == 3 {
+                            let mut key = [idx[0], idx[1], idx[2], idx[3]];
+                            key.sort_unstable();
+                            if let Some((tag, line)) = quad_seen.insert(key, (v[0], ln.line)) {
+                                return Err(ln.err(format!(
+                                    "element {} has the nodes of element {tag} (line {line}): a repeated element counts its stiffness and loads twice",
+                                    v[0]
+                                )));
+                            }
                             quads.push([idx[0], idx[1], idx[2], idx[3]]);
                             quad_lines.push(ln.line);
                             quad_tags.push(v[0]);
@@ -369,6 +398,59 @@ $Elements
 5 2 3 6 5
 $EndElements
 "#;
+
+    #[track_caller]
+    fn refused(text: &str, line: usize, needles: &[&str]) {
+        let e = parse(Path::new("bad.msh"), text)
+            .expect_err("refused")
+            .to_string();
+        assert!(e.contains(&format!("bad.msh:{line}")), "{e}");
+        for n in needles {
+            assert!(e.contains(n), "`{n}` not in: {e}");
+        }
+    }
+
+    /// Review 5: a NaN coordinate was reported as a zero-area element, a
+    /// repeated node tag as an element's unknown node, and a repeated
+    /// element was accepted with its stiffness and loads counted twice.
+    #[test]
+    fn non_finite_coordinates_repeated_tags_and_elements_are_named() {
+        // Node 5 (line 32) at x = nan, then at x = inf.
+        for (bad, word) in [("nan 1 0", "NaN"), ("inf 1 0", "inf")] {
+            let text = MSH.replacen("1 1 0\n", &format!("{bad}\n"), 1);
+            refused(&text, 32, &["node 5", "coordinate x is not finite", word]);
+        }
+        // Tag 2 given to the third node too (coordinates at lines 29, 30).
+        let text = MSH.replacen("2\n3\n4\n", "2\n2\n4\n", 1);
+        refused(&text, 30, &["node tag 2 appears twice", "line 29"]);
+        // Element 5 given the nodes of element 4, in another order.
+        let text = MSH.replacen("5 2 3 6 5", "5 5 4 1 2", 1);
+        refused(
+            &text,
+            46,
+            &["element 5 has the nodes of element 4", "line 44"],
+        );
+    }
+
+    #[test]
+    fn coincident_nodes_that_share_no_element_are_found() {
+        let m = parse(Path::new("two.msh"), MSH).unwrap();
+        assert_eq!(m.coincident_nodes(1e-9), None);
+        // The second quad on its own copy of the middle column (tags 8, 9).
+        let cut = MSH
+            .replacen("1 7 1 7\n2 1 0 7\n", "1 9 1 9\n2 1 0 9\n", 1)
+            .replacen("7\n0 0 0", "7\n8\n9\n0 0 0", 1)
+            .replacen("5 5 0\n", "5 5 0\n1 0 0\n1 1 0\n", 1)
+            .replacen("5 2 3 6 5", "5 8 3 6 9", 1);
+        let m = parse(Path::new("cut.msh"), &cut).unwrap();
+        let (a, b, d) = m.coincident_nodes(1e-9).expect("the cut");
+        assert_eq!(d, 0.0);
+        assert_eq!((at(&m, a), at(&m, b)).0, at(&m, b));
+        assert_eq!(
+            m.element_of(a).map(|e| e.0).unwrap() + m.element_of(b).map(|e| e.0).unwrap(),
+            9
+        );
+    }
 
     fn at(m: &Mesh, n: usize) -> [f64; 3] {
         m.nodes[n].into()

@@ -123,6 +123,9 @@ struct RawMesh {
     #[serde(default, deserialize_with = "super::exact::option")]
     divisions: Option<[usize; 2]>,
     node_tolerance: Option<f64>,
+    /// "refuse" (default) or "keep": nodes of a mesh file within
+    /// node_tolerance that share no element ([`Mesh::coincident_nodes`]).
+    coincident_nodes: Option<String>,
     #[serde(default, deserialize_with = "super::exact::option")]
     start: Option<[f64; 2]>,
     #[serde(default, deserialize_with = "super::exact::option")]
@@ -667,6 +670,29 @@ pub fn load(path: &Path) -> Result<ShellScene> {
         Some(t) => c.positive("mesh.node_tolerance", t)?,
         None => 1e-9 * size,
     };
+    if raw.mesh.file.is_some()
+        && raw.mesh.coincident_nodes.as_deref() != Some("keep")
+        && let Some((a, b, d)) = mesh.coincident_nodes(tol)
+    {
+        let x = mesh.nodes[a];
+        let at = |n: usize| {
+            mesh.element_of(n).map_or(String::new(), |(tag, line)| {
+                format!("element {tag}, line {line}")
+            })
+        };
+        return Err(c.fail(
+            "mesh.file",
+            format!(
+                "{}: two nodes at ({}, {}, {}) coincide (distance {d:.1e}, mesh.node_tolerance {tol:.1e}) but share no element ({}; {}): the shell is cut there. Merge them (gmsh: Coherence Mesh), or set mesh.coincident_nodes = \"keep\" for an intended cut",
+                mesh.file.display(),
+                x.x,
+                x.y,
+                x.z,
+                at(a),
+                at(b)
+            ),
+        ));
+    }
     let mut ctx = Ctx {
         c: Checker { file: path },
         mesh: &mesh,
@@ -979,6 +1005,15 @@ fn mesh(c: &Checker, path: &Path, m: &RawMesh, obstacles: &[ObstacleSpec]) -> Re
     };
     match (&m.file, &m.kind) {
         (Some(f), None) => {
+            if let Some(v) = &m.coincident_nodes
+                && v != "refuse"
+                && v != "keep"
+            {
+                return Err(c.fail(
+                    "mesh.coincident_nodes",
+                    format!("expected \"refuse\" or \"keep\", got \"{v}\""),
+                ));
+            }
             for (k, present) in [
                 ("mesh.x", m.x.is_some()),
                 ("mesh.y", m.y.is_some()),
@@ -1004,6 +1039,7 @@ fn mesh(c: &Checker, path: &Path, m: &RawMesh, obstacles: &[ObstacleSpec]) -> Re
         }
         (None, Some(kind)) => {
             let kind = kind.as_str();
+            unused("mesh.coincident_nodes", m.coincident_nodes.is_some(), kind)?;
             if kind != "strip" {
                 for (k, present) in strip_keys(m) {
                     unused(k, present, kind)?;
