@@ -165,3 +165,49 @@ fn a_negative_lambda_end_writes_its_rows_in_path_order() {
         );
     }
 }
+
+/// Review 5: reactions at a deflection far beyond the linear range summed
+/// to 9.16 times the load on a thin plate (1.4e4 plate lengths), the
+/// nonlinear terms' round-off in the cubic through λ_end / 3 steps. Here a
+/// tip load of 1e7 N on the cantilever: 2e5 m of tip deflection in the
+/// linear model. The linear model's reactions are the load, whatever its
+/// amplitude.
+#[test]
+fn linear_reactions_balance_the_load_at_any_amplitude() {
+    let q = -1e8;
+    let file = ScratchFile::with_text("linear-reactions", "c.toml", &cantilever(q, 1.0, 1.0));
+    let scene = anm::scene::shell::load(&file).expect("scene");
+    let r = run_loaded(&scene, None, false).expect("linear run");
+    let load = -0.1 * q;
+    let (rz, uz) = (r.end["Rz"], r.end["uz_tip"]);
+    println!("q = {q}: Rz = {rz:.15e} (load {load}), uz_tip = {uz:.6e}");
+    assert!((rz - load).abs() <= 1e-9 * load, "Rz = {rz} against {load}");
+}
+
+/// Review 5: a clamped plate at thickness 1e-6, 1e-7, 1e-8 of its size
+/// deflected 2.3e-4, 1.9e-2 and 28% off the plate's closed form, exit 0:
+/// the membrane stiffness, (L/t)² times the bending's, buries the bending
+/// in round-off. The linear run estimates that error by one step of
+/// iterative refinement and stops where it exceeds solver.residual_tol.
+#[test]
+fn a_thin_shell_beyond_round_off_is_refused_by_the_linear_method() {
+    let thick = cantilever(-10.0, 1.0, 1.0);
+    assert!(thick.contains("thickness = 0.01"), "{thick}");
+    // The same cantilever, t / L = 1e-7, with the load scaled by t³.
+    let thin = thick
+        .replace("thickness = 0.01", "thickness = 1e-7")
+        .replace("-10", "-1e-14");
+    let file = ScratchFile::with_text("linear-thin", "c.toml", &thin);
+    let scene = anm::scene::shell::load(&file).expect("scene");
+    let e = run_loaded(&scene, None, false).expect_err("refused");
+    let text = e.to_string();
+    println!("{text}");
+    for needle in [
+        "ill-conditioned to round-off",
+        "iterative refinement",
+        "solver.residual_tol",
+        "thickness / model size = 1.0e-7",
+    ] {
+        assert!(text.contains(needle), "`{needle}` not in: {text}");
+    }
+}
