@@ -1117,6 +1117,9 @@ fn time_summary(r: &anm::run::shell_time::TimeReport, out: &std::path::Path) -> 
     if let Some(m) = &r.stop_message {
         println!("  {m}");
     }
+    for n in &r.notes {
+        println!("  note: {n}");
+    }
     for e in &r.events {
         println!(
             "  critical point ({} tangent, {}): t = {:.6e} s, lambda = {:.6e} (between outputs {:.6e} and {:.6e} s{}; negative pivots {} -> {}), {}",

@@ -77,6 +77,10 @@ pub struct TimeReport {
     pub history: Vec<Vec<f64>>,
     /// Critical points between output times (`friction.stability`).
     pub events: Vec<TimeEvent>,
+    /// What the user should know about the answers (e.g. friction nodes
+    /// whose stick/slip state the regularization decides).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub notes: Vec<String>,
 }
 
 /// The model and laws of a friction scene, ready to integrate.
@@ -247,6 +251,23 @@ fn row(dae: &FrictionDae, scene: &ShellScene, areas: &[f64], s: &TimeSample) -> 
 /// stick/slip map, slip_area): 10 ω Vc, ten times the regularization's.
 pub fn slip_threshold(law: &crate::contact::FrictionLaw) -> f64 {
     10.0 * law.omega * law.vc
+}
+
+/// A friction node's state by its slip speed: `slip` above 10 ω Vc,
+/// `stick` up to ω Vc, and `transition` between. In that range the
+/// regularized law cannot tell a node that sticks (it creeps at
+/// ω Vc m / sqrt(1 − m²) for a mobilisation m: 3.3 ω Vc at m = 0.958)
+/// from one that slips at a speed the kinematics sets (review 5: a plate
+/// held on a plane moving at V = 3.3 ω Vc was labelled `stick` on every
+/// node). Returns the label and the VTU `stick` value (1, 0.5, 0).
+pub fn friction_state(law: &crate::contact::FrictionLaw, speed: f64) -> (&'static str, f64) {
+    if speed > slip_threshold(law) {
+        ("slip", 0.0)
+    } else if speed > law.omega * law.vc {
+        ("transition", 0.5)
+    } else {
+        ("stick", 1.0)
+    }
 }
 
 fn header(scene: &ShellScene) -> Vec<String> {
@@ -482,7 +503,26 @@ fn report(
         header: head.clone(),
         history: rows.clone(),
         events,
+        notes: vec![],
     };
+    if let Some(law) = scene.friction.as_ref().map(|f| f.law) {
+        let speeds: Vec<f64> = last
+            .friction
+            .iter()
+            .map(|f| f.slip.norm())
+            .filter(|&v| friction_state(&law, v).0 == "transition")
+            .collect();
+        if let Some(fastest) = speeds.iter().copied().reduce(f64::max) {
+            report.notes.push(format!(
+                "{} of {} friction nodes at t = {stop_t} slip at speeds between omega Vc = {:.3e} and 10 omega Vc = {:.3e} (up to {fastest:.3e}): `transition` in friction.csv (0.5 in friction.vtu's stick), where the regularization, not the mechanics, decides stick or slip; a friction.omega below {:.1e} separates them",
+                speeds.len(),
+                last.friction.len(),
+                law.omega * law.vc,
+                slip_threshold(&law),
+                fastest / (10.0 * law.vc)
+            ));
+        }
+    }
     if let Some(dir) = out_dir {
         std::fs::create_dir_all(dir).map_err(|source| Error::Io {
             file: dir.to_path_buf(),
@@ -518,11 +558,7 @@ fn report(
         .map_err(|e| write_err(&file)(e.to_string()))?;
         for f in &last.friction {
             let speed = f.slip.norm();
-            let state = if speed > slip_threshold(&law) {
-                "slip"
-            } else {
-                "stick"
-            };
+            let (state, _) = friction_state(&law, speed);
             let mut rec = vec![(f.node + 1).to_string(), f.obstacle.to_string()];
             rec.extend(
                 [
@@ -592,11 +628,7 @@ fn write_fields(path: &Path, scene: &ShellScene, dae: &FrictionDae, s: &TimeSamp
         rn[f.node] += f.rn;
         force[f.node] += f.force;
         slip[f.node] = f.slip;
-        stick[f.node] = if f.slip.norm() > slip_threshold(&law) {
-            0.0
-        } else {
-            1.0
-        };
+        stick[f.node] = friction_state(&law, f.slip.norm()).1;
     }
     let speed = slip.iter().map(|v| v.norm()).collect();
     let areas = scene.mesh.node_areas();
