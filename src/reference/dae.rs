@@ -46,6 +46,14 @@ pub trait FrictionDae: Dae {
     fn constraint_drift(&self, _t: f64, _y: &[f64]) -> f64 {
         0.0
     }
+    /// dG/dR_N = 2 R_N / K + h of the contact law G = R_N (R_N/K + h) −
+    /// eta (delta − h) at y (None without contact). Positive on the law's
+    /// physical root (R_N ≈ −K h in contact, eta (delta − h) / h open),
+    /// negative on its other root, where the mass passes through the
+    /// obstacle with a vanishing force.
+    fn contact_branch(&self, _t: f64, _y: &[f64]) -> Option<f64> {
+        None
+    }
 }
 
 /// Finite-difference check of [`Dae::jacobian`]: the largest

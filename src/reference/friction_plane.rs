@@ -103,6 +103,9 @@ impl FrictionDae for FrictionPlane {
     fn row(&self, t: f64, y: &[f64]) -> Vec<f64> {
         vec![t, y[0], y[1], y[2], y[3], y[4], y[5]]
     }
+    fn contact_branch(&self, _t: f64, y: &[f64]) -> Option<f64> {
+        Some(self.contact.d_force(y[4], self.contact.delta + y[1]))
+    }
     fn slip(&self, _t: f64, y: &[f64]) -> f64 {
         y[2] - self.v_plane
     }

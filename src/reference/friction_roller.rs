@@ -185,6 +185,10 @@ impl FrictionDae for FrictionRoller {
         let fr = self.frame(y[0], y[1]);
         dot([y[2], y[3]], fr.t) + self.spin * self.radius
     }
+    fn contact_branch(&self, _t: f64, y: &[f64]) -> Option<f64> {
+        let fr = self.frame(y[0], y[1]);
+        Some(self.contact.d_force(y[4], fr.h))
+    }
     fn constraint_drift(&self, _t: f64, y: &[f64]) -> f64 {
         let fr = self.frame(y[0], y[1]);
         self.contact.residual(y[4], fr.h)

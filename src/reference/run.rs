@@ -308,6 +308,24 @@ pub fn drive(
                 return Ok(());
             }
             drift = drift.max(dae.constraint_drift(t, &y).abs());
+            // The other root of the contact law: a solution that satisfies
+            // the equations with the mass through the obstacle (review 6:
+            // IDA with the algebraic unknowns out of its error test ended
+            // friction-plane at q = 0, K = 1e8 N/m, eta = 1e-8 N with u_y =
+            // -3 m for a plane at -1 m, R_N = -1.5e-8 N, exit 0).
+            if let Some(g) = dae.contact_branch(t, &y)
+                && !(g > 0.0)
+            {
+                stop = IdaStop {
+                    reason: "off_branch".into(),
+                    t,
+                    message: Some(format!(
+                        "at t = {t:.12e} s the solution left the contact law's physical root: 2 R_N / K + h = {g:.3e} <= 0, the mass through the obstacle with R_N = {:.3e} N (a root of eq. 3 that is not the contact); with the algebraic unknowns out of the error test (--atol-algebraic suppress) nothing stops the step there: give them a tolerance (e.g. --atol-algebraic 1e-8)",
+                        dae.row(t, &y)[dae.columns().iter().position(|c| *c == "rn").unwrap_or(0)]
+                    )),
+                };
+                return Ok(());
+            }
             // Output rows within this step, from the solver's interpolant.
             let t_prev = prev.0;
             while next < grid.len() && grid[next] <= t + 1e-12 * t_end {

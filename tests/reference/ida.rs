@@ -489,3 +489,43 @@ fn library_defaults_stall_and_the_tuned_setup_does_not() {
     assert!(plain.order_one_steps() * 2 > plain.counters.steps as usize);
     assert!(tuned.counters.steps <= 1500);
 }
+
+/// Review 6: IDA with the algebraic unknowns out of its error test (the
+/// default, `suppress`) ended friction-plane at q = 0, K = 1e8 N/m, eta =
+/// 1e-8 N at u_y = -3 m, 2 m through the plane, with R_N = -1.5e-8 N (the
+/// other root of eq. 3), exit 0. The run now stops there, and with the
+/// algebraic unknowns in the test it reaches the end on the contact, where
+/// the ANM ends too (u_x within 1e-6).
+#[test]
+fn ida_off_the_contact_law_s_root_is_stopped() {
+    let mut sc = load("friction-plane");
+    sc.friction.q = 0.0;
+    let law = sc.contact.as_mut().expect("contact");
+    law.k = 1e8;
+    law.eta = 1e-8;
+    let run = solve(&sc, &settings(1e-8)).expect("IDA runs");
+    println!("suppress: {:?}", run.stop);
+    assert_eq!(run.stop.reason, "off_branch");
+    assert!(
+        run.stop
+            .message
+            .as_deref()
+            .unwrap_or("")
+            .contains("--atol-algebraic")
+    );
+    let mut kept = settings(1e-8);
+    kept.algebraic = anm::reference::settings::AlgebraicControl::Atol(1e-8);
+    let run = solve(&sc, &kept).expect("IDA runs");
+    assert_eq!(run.stop.reason, "end", "{:?}", run.stop);
+    let ux = col(&run.columns, "ux");
+    let uy = col(&run.columns, "uy");
+    let last = run.history.last().expect("rows");
+    let a = anm(&sc);
+    let a_last = a.history.last().expect("ANM rows");
+    println!(
+        "IDA u = ({}, {}), ANM u = ({}, {})",
+        last[ux], last[uy], a_last[1], a_last[2]
+    );
+    assert!((last[uy] + 1.0).abs() < 1e-6, "u_y = {}", last[uy]);
+    assert!((last[ux] - a_last[1]).abs() < 1e-6 * a_last[1].abs(), "u_x");
+}
