@@ -606,6 +606,19 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
             for &z in zeta.iter().chain(&omega) {
                 anm::reference::settings::positive("zeta and omega", z)?;
             }
+            // 0 ran once and reported a "median" of one run (review 6).
+            if repeat == 0 || rounds == 0 {
+                anyhow::bail!(
+                    "--repeat and --rounds must be at least 1 (got {repeat} and {rounds})"
+                );
+            }
+            // The folder before the runs, not after them (review 6: a
+            // folder that cannot be made failed after the whole bench).
+            if let Some(out) = &out
+                && !items.list_items
+            {
+                anm::output::create_dir(out)?;
+            }
             if stiffness {
                 bench_stiffness(
                     &scenes,

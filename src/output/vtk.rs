@@ -135,7 +135,7 @@ pub fn write_vtu_cells(
 }
 
 fn finite(x: f64) -> f64 {
-    if x.is_finite() { x } else { 0.0 }
+    if x.is_finite() { x + 0.0 } else { 0.0 }
 }
 
 /// Writes a .pvd collection: (lambda, part, file name relative to the .pvd).

@@ -122,7 +122,7 @@ pub fn summary(scene: &ShellScene, available: Option<(f64, &str)>) -> String {
         format!("; {:.1} GiB of {source}", bytes / GIB)
     });
     format!(
-        "memory: {} unknowns, a run typically needs {:.2} GiB (at least {:.2}){have}",
+        "memory: {} unknowns (6 per node, before the fixes), a run typically needs {:.2} GiB (at least {:.2}){have}",
         e.unknowns,
         e.typical / GIB,
         e.low / GIB

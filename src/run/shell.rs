@@ -179,8 +179,18 @@ pub fn resume(out_dir: &Path, progress: bool) -> Result<RunReport> {
         let v: serde_json::Value = serde_json::from_str(&text).ok()?;
         let stop = &v["stop"];
         // A run in time writes `stop` as a string with `stop_t`.
+        // A point-mass friction run writes `stop.t` (review 6: "lambda =
+        // null"); it takes milliseconds and is not resumable.
         let (reason, at) = match stop.as_str() {
             Some(reason) => (reason, format!("t = {}", v["stop_t"])),
+            None if stop["t"].is_number() => (
+                stop["reason"].as_str()?,
+                format!(
+                    "t = {}; a {} run is not resumable, run it again",
+                    stop["t"],
+                    v["kind"].as_str().unwrap_or("point-mass friction")
+                ),
+            ),
             None => (
                 stop["reason"].as_str()?,
                 format!("lambda = {}", stop["lambda"]),
@@ -847,7 +857,14 @@ fn run_inner(
         .state
         .history
         .last()
-        .map(|r| rec.columns.iter().cloned().zip(r.iter().copied()).collect())
+        // + 0.0: no −0 in summary.json and the console (review 5).
+        .map(|r| {
+            rec.columns
+                .iter()
+                .cloned()
+                .zip(r.iter().map(|x| x + 0.0))
+                .collect()
+        })
         .unwrap_or_default();
     let interrupted = matches!(stop, PathStop::Interrupted { .. });
     if out_dir.is_some() && !interrupted {

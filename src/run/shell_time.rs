@@ -498,7 +498,13 @@ fn report(
         end: head
             .iter()
             .cloned()
-            .zip(rows.last().cloned().unwrap_or_default())
+            .zip(
+                rows.last()
+                    .cloned()
+                    .unwrap_or_default()
+                    .iter()
+                    .map(|x| x + 0.0),
+            )
             .collect(),
         header: head.clone(),
         history: rows.clone(),

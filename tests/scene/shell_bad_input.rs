@@ -767,3 +767,69 @@ vtk_every = 0
     let (_m, typo) = scene_for("typo", &cut, "coincident_nodes = \"merge\"");
     expect_err(load(&typo), &["mesh.coincident_nodes", "\"merge\""]);
 }
+
+/// Review 5: a contact probe on a node that is not a contact candidate
+/// read 0 in every row, exit 0.
+#[test]
+fn a_contact_probe_off_the_candidates_is_refused() {
+    let s = scene(
+        "probe-off.toml",
+        &mesh_path(),
+        &[(
+            "group = \"strip\"\n# Per node",
+            "group = \"load_A\"\n# Per node",
+        )],
+    );
+    expect_err(
+        load(&s),
+        &[
+            "probe-off.toml",
+            "probe[2]",
+            "not a contact candidate",
+            "reads 0",
+        ],
+    );
+}
+
+/// Review 5: a model far from the origin loses accuracy (strains from
+/// absolute positions) and a 1 m model 1 km away failed to converge: the
+/// scene is warned about.
+#[test]
+fn a_model_far_from_the_origin_is_warned_about() {
+    let text = |x0: f64| {
+        format!(
+            r#"[scene]
+kind = "shell"
+[mesh]
+type = "rectangle"
+x = [{x0}, {}]
+y = [0.0, 0.1]
+divisions = [4, 1]
+[material]
+young = 1e9
+poisson = 0.3
+[shell]
+thickness = 0.01
+[[fix]]
+group = "s0"
+clamp = true
+[[load]]
+group = "s1"
+force = [0.0, 0.0, 1.0]
+[solver]
+lambda_end = 1.0
+[output]
+lambda_step = 0.5
+"#,
+            x0 + 1.0
+        )
+    };
+    let near = ScratchFile::with_text("far-origin", "near.toml", &text(10.0));
+    assert!(load(&near).unwrap().warnings.is_empty());
+    let far = ScratchFile::with_text("far-origin", "far.toml", &text(1000.0));
+    let w = load(&far).unwrap().warnings.join("\n");
+    assert!(
+        w.contains("far.toml") && w.contains("from the origin"),
+        "{w}"
+    );
+}
