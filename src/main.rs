@@ -529,6 +529,9 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
                 max_nonlin_iters,
             };
             let sc = reference_scene(&scene, "IDA")?;
+            // An earlier run's files would stand beside this one's (review
+            // 6: an ANM plot of another scene next to IDA's summary).
+            fresh_output(&out)?;
             let run = anm::reference::solve(&sc, &settings)
                 .with_context(|| format!("IDA on {}", scene.display()))?;
             reference_report(&scene, &run, &out)
@@ -564,6 +567,7 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
                     .map_err(|e: String| anyhow::anyhow!("--friction-row: {e}"))?,
             };
             let sc = reference_scene(&scene, "diffsol")?;
+            fresh_output(&out)?;
             let run = anm::reference::diffsol::solve(&sc, &settings)
                 .with_context(|| format!("diffsol on {}", scene.display()))?;
             reference_report(&scene, &run, &out)
