@@ -314,8 +314,6 @@ fn grid_points(
     Ok(points)
 }
 
-/// Scaled length of a chord (du, dlambda): displacements against the
-/// model's characteristic length, lambda against its range.
 /// The relative uncertainty of the linear solution u of K u = −r_λ: one
 /// step of iterative refinement, du = K⁻¹ (−r_λ − K u), and |du|∞ / |u|∞.
 /// Where the error is the conditioning's (a thin shell: the membrane
@@ -336,6 +334,8 @@ fn refinement_step(
     largest(&du) / largest(u).max(f64::MIN_POSITIVE)
 }
 
+/// Scaled length of a chord (du, dlambda): displacements against the
+/// model's characteristic length, lambda against its range.
 fn chord(model: &ShellModel, du: &[f64], dl: f64, lambda_scale: f64) -> f64 {
     let parts: Vec<f64> = du
         .iter()
@@ -639,6 +639,14 @@ fn run_inner(
             let mut prev = (zero.clone(), 0.0);
             let mut count = 0usize;
             let mut inertia: Option<usize> = None;
+            // Displacement per unit load of the last increment, and whether
+            // a turning back was noted (review 5: a load-controlled Newton
+            // jumped over the arch's snap-through silently, and an
+            // arclength one followed it while history.csv kept each lambda
+            // once).
+            let mut last_rate: Option<f64> = None;
+            let mut turned = false;
+            let load_control = ncfg.control == crate::series::newton::Control::Load;
             let brackets = &mut newton_brackets;
             // The engine holds the model; probes read a second instance.
             let mut view = build_model(scene)?;
@@ -673,6 +681,27 @@ fn run_inner(
                         ));
                     }
                     inertia = now.or(inertia);
+                    let dl = lambda - prev.1;
+                    let rate =
+                        chord(m, &du, 0.0, ncfg.lambda_end.abs()) / dl.abs().max(f64::MIN_POSITIVE);
+                    if load_control
+                        && let Some(r) = last_rate
+                        && rate > 10.0 * r
+                    {
+                        brackets.push(format!(
+                            "between lambda = {:.6e} and {lambda:.6e} the displacements moved {:.0} times faster per unit load than in the increment before: a jump, as past a limit point under load control; the path between is not followed (solver.newton_control = \"arclength\" or the ANM follows it)",
+                            prev.1,
+                            rate / r
+                        ));
+                    }
+                    last_rate = Some(rate);
+                    if !turned && dl * ncfg.lambda_end.signum() < 0.0 {
+                        turned = true;
+                        brackets.push(format!(
+                            "the path turns back at lambda = {:.6e} (a limit point): history.csv holds each output lambda once, at its first crossing (the ANM records every crossing); steps.csv has every increment",
+                            prev.1
+                        ));
+                    }
                     let contact_switches = rec.state.contact.update(&m.events(u, lambda)?);
                     rec.step(&StepRow {
                         step: count,

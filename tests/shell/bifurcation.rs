@@ -587,3 +587,37 @@ vtk_every = 0
         e.bracket
     );
 }
+
+/// Review 5: Newton runs over the clamped arch's snap-through. Under load
+/// control the increment over the limit point jumped to the far branch
+/// (27 times the displacement rate of the increment before) with no word;
+/// under arclength control the path turned back while history.csv kept
+/// each lambda once. Both are now noted.
+#[test]
+fn newton_runs_note_a_jump_and_a_turning_back() {
+    let path = format!(
+        "{}/scenes/verification/clamped-arch-snap.toml",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    let base = std::fs::read_to_string(path)
+        .unwrap()
+        .replace("order = 20\neps = 1e-8", "method = \"newton\"")
+        .replace("snapshots = [0.45]", "");
+    for (control, needle) in [
+        (
+            "\nnewton_control = \"load\"",
+            "a jump, as past a limit point",
+        ),
+        ("", "the path turns back at lambda"),
+    ] {
+        let text = base.replace(
+            "method = \"newton\"",
+            &format!("method = \"newton\"{control}"),
+        );
+        let file = crate::scratch::ScratchFile::with_text("newton-snap", "a.toml", &text);
+        let r = run_loaded(&load(&file).unwrap(), None, false).unwrap();
+        println!("{:?}", r.notes);
+        assert_eq!(r.stop.reason, "end");
+        assert!(r.notes.iter().any(|n| n.contains(needle)), "{:?}", r.notes);
+    }
+}
