@@ -320,8 +320,11 @@ pub fn drive(
                     reason: "off_branch".into(),
                     t,
                     message: Some(format!(
-                        "at t = {t:.12e} s the solution left the contact law's physical root: 2 R_N / K + h = {g:.3e} <= 0, the mass through the obstacle with R_N = {:.3e} N (a root of eq. 3 that is not the contact); with the algebraic unknowns out of the error test (--atol-algebraic suppress) nothing stops the step there: give them a tolerance (e.g. --atol-algebraic 1e-8)",
-                        dae.row(t, &y)[dae.columns().iter().position(|c| *c == "rn").unwrap_or(0)]
+                        "at t = {t:.12e} s the solution left the contact law's physical root: 2 R_N / K + h = {g:.3e} <= 0, the mass through the obstacle{} (a root of eq. 3 that is not the contact); with the algebraic unknowns out of the error test (--atol-algebraic suppress) nothing stops the step there: give them a tolerance (e.g. --atol-algebraic 1e-8)",
+                        dae.columns().iter().position(|c| *c == "rn").map_or(
+                            String::new(),
+                            |i| format!(" with R_N = {:.3e} N", dae.row(t, &y)[i])
+                        )
                     )),
                 };
                 return Ok(());

@@ -666,7 +666,9 @@ fn run_inner(
                         });
                     }
                     let du: Vec<f64> = u.iter().zip(&prev.0).map(|(a, b)| a - b).collect();
-                    rec.state.arclength += chord(m, &du, lambda - prev.1, ncfg.lambda_end.abs());
+                    let dl = lambda - prev.1;
+                    let length = chord(m, &du, dl, ncfg.lambda_end.abs());
+                    rec.state.arclength += length;
                     count += 1;
                     // The inertia brackets critical points between steps
                     // (review 4: steps.csv showed 1 negative pivot past
@@ -681,7 +683,6 @@ fn run_inner(
                         ));
                     }
                     inertia = now.or(inertia);
-                    let dl = lambda - prev.1;
                     let rate =
                         chord(m, &du, 0.0, ncfg.lambda_end.abs()) / dl.abs().max(f64::MIN_POSITIVE);
                     if load_control
@@ -707,7 +708,7 @@ fn run_inner(
                         step: count,
                         lambda_start: prev.1,
                         lambda_end: lambda,
-                        length: chord(m, &du, lambda - prev.1, ncfg.lambda_end.abs()),
+                        length,
                         pade: false,
                         end_residual: 0.0,
                         geometric: false,

@@ -575,10 +575,10 @@ fn attempt<P: DaeProblem + ?Sized>(
     let mut a: Vec<f64> = Vec::new();
     let mut lu = DenseLu::default();
     let mut last: Option<(Vec<f64>, Vec<f64>)> = None;
-    // The iterate's series, its G and a scratch vector (reused).
+    // The iterate's series and its G (reused).
     let mut s = Vec::new();
     let mut r = vec![0.0; nd];
-    let mut scratch = vec![0.0; nd];
+    let first_h = first_increment(series0, nd, h);
     // The next update, computed before the convergence test.
     let mut next = vec![0.0; nd];
     for _ in 0..MAX_ITERATIONS {
@@ -601,11 +601,7 @@ fn attempt<P: DaeProblem + ?Sized>(
         // 20, eps 1e-8: an end at t = 0.1808 s with v = −2.4e-2 rad/s
         // against −1.8e-4 on the manifold passed its fast-amplitude test
         // at 0.95 of the tolerance that this velocity set).
-        for (x, c) in scratch.iter_mut().zip(series0) {
-            *x = c[1];
-        }
-        let first = norm(&scratch);
-        let scale = (first * h).max(norm(&u1));
+        let scale = first_h.max(norm(&u1));
         let tol = (0.1 * cfg.eps * scale).max(16.0 * f64::EPSILON * mag);
         // The last update moved u1 by round-off only: G is at its floor
         // (if within 1e3 of the tolerance; otherwise the iteration failed).
@@ -736,6 +732,13 @@ fn attempt<P: DaeProblem + ?Sized>(
     })
 }
 
+/// The first-order increment of the differential unknowns over h, |u_1| h,
+/// from the step start's series: with |u| (when u barely moves), the scale
+/// of a step's local error.
+fn first_increment(series0: &[Vec<f64>], nd: usize, h: f64) -> f64 {
+    norm(&series0[..nd].iter().map(|c| c[1]).collect::<Vec<_>>()) * h
+}
+
 /// An output time inside an implicit step from the Hermite guess itself,
 /// without solving (I2) there: where the guess's positions u agree with
 /// the interpolant of one order more at both ends (`finer`) to the step's
@@ -761,8 +764,7 @@ fn hermite_point<P: DaeProblem + ?Sized>(
 ) -> Option<(f64, Vec<f64>, Vec<f64>)> {
     let nd = eng.nd;
     let u = &guess[..nd];
-    let first = norm(&series0[..nd].iter().map(|c| c[1]).collect::<Vec<_>>());
-    let scale = (first * h).max(norm(u));
+    let scale = first_increment(series0, nd, h).max(norm(u));
     let estimate = norm(
         &(0..nd)
             .map(|i| guess[i] - crate::series::taylor::eval(&finer[i], s))
