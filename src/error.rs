@@ -101,7 +101,7 @@ pub enum Error {
     TimeSteps {
         param: &'static str,
         at: f64,
-        /// The node (0-based) the diagnosis names, if any.
+        /// The node the diagnosis names, if any (its tag).
         node: Option<usize>,
         what: String,
     },
@@ -163,8 +163,8 @@ impl Error {
         }
     }
 
-    /// The node (0-based) numerical trouble is located at, where the error
-    /// names one.
+    /// The node numerical trouble is located at, where the error names one:
+    /// its tag (`ShellModel::node_tag`, the number the mesh file gives it).
     pub fn node(&self) -> Option<usize> {
         match self {
             Error::ContactMissed { node, .. } => Some(*node),

@@ -99,6 +99,7 @@ pub fn parse(path: &Path, text: &str) -> Result<Mesh> {
     // element would count its stiffness and loads twice.
     let mut quad_seen: HashMap<[usize; 4], (usize, usize)> = HashMap::new();
     let mut nodes: Vec<Vec3> = Vec::new();
+    let mut file_tags: Vec<usize> = Vec::new();
     let mut quads: Vec<[usize; 4]> = Vec::new();
     let mut quad_lines = Vec::new();
     let mut quad_tags = Vec::new();
@@ -193,6 +194,7 @@ pub fn parse(path: &Path, text: &str) -> Result<Mesh> {
                         node_lines.insert(tag, ln.line);
                         node_index.insert(tag, nodes.len());
                         nodes.push(Vec3::new(c[0], c[1], c[2]));
+                        file_tags.push(tag);
                     }
                 }
                 ln.next()?;
@@ -295,11 +297,13 @@ pub fn parse(path: &Path, text: &str) -> Result<Mesh> {
     // Keep only nodes used by quadrilaterals.
     let mut used = vec![usize::MAX; nodes.len()];
     let mut kept = Vec::new();
+    let mut node_tags = Vec::new();
     for q in &mut quads {
         for n in q.iter_mut() {
             if used[*n] == usize::MAX {
                 used[*n] = kept.len();
                 kept.push(nodes[*n]);
+                node_tags.push(file_tags[*n]);
             }
             *n = used[*n];
         }
@@ -330,6 +334,7 @@ pub fn parse(path: &Path, text: &str) -> Result<Mesh> {
     Ok(Mesh {
         file: path.to_path_buf(),
         nodes: kept,
+        node_tags,
         quads,
         quad_lines,
         quad_tags,

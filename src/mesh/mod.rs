@@ -31,6 +31,10 @@ pub struct Mesh {
     /// Source file (or a `<built-in ...>` label) for error messages.
     pub file: PathBuf,
     pub nodes: Vec<Vec3>,
+    /// The number users know each node by: its gmsh node tag, or the
+    /// 1-based index for a built-in mesh. Outputs and messages name nodes
+    /// by it, as they name elements by `quad_tags`.
+    pub node_tags: Vec<usize>,
     pub quads: Vec<[usize; 4]>,
     /// Line of each element in the source file (0 for built-in meshes).
     pub quad_lines: Vec<usize>,
@@ -373,7 +377,7 @@ impl Mesh {
                         format!(
                             "inverted or degenerate element: corner {} (node {}) has Jacobian {j:.3e}",
                             i + 1,
-                            q[i] + 1
+                            self.node_tags[q[i]]
                         ),
                     ));
                 }
@@ -397,7 +401,7 @@ impl Mesh {
                         e,
                         format!(
                             "inverted element: its normal is opposite to the director at node {} (inconsistent orientation)",
-                            node + 1
+                            self.node_tags[node]
                         ),
                     ));
                 }

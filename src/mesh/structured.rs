@@ -85,6 +85,7 @@ pub fn grid(label: &str, nx: usize, ny: usize, f: impl Fn(usize, usize) -> (Vec3
     surface_groups.insert("all".to_string(), (0..ne).collect());
     Mesh {
         file: format!("<built-in {label} {nx}x{ny}>").into(),
+        node_tags: (1..=nodes.len()).collect(),
         nodes,
         quads,
         quad_lines: vec![0; ne],
@@ -115,6 +116,7 @@ pub fn close_t(mut m: Mesh) -> Mesh {
         }
     }
     m.nodes.truncate(last);
+    m.node_tags.truncate(last);
     if let Some(normals) = &mut m.exact_normals {
         normals.truncate(last);
     }

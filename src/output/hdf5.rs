@@ -43,6 +43,18 @@ impl FieldWriter {
         })
     }
 
+    /// Writes identifiers (e.g. the mesh file's node tags, one per row of
+    /// the fields) as a dataset of the root group.
+    pub fn write_tags(&mut self, name: &str, tags: &[usize]) -> Result<()> {
+        let v: Vec<u64> = tags.iter().map(|&t| t as u64).collect();
+        self.file
+            .new_dataset_builder()
+            .with_data(&v)
+            .create(name)
+            .map(|_| ())
+            .map_err(|e| err(&self.path, e))
+    }
+
     /// Writes a step: scalar attributes and (name, columns, values) fields,
     /// row-major with `columns` values per node.
     pub fn write_step(

@@ -20,6 +20,12 @@ pub fn csv_number(x: f64) -> String {
 
 /// Writes a CSV file with a header row; values in full precision.
 pub fn write_csv(path: &Path, header: &[&str], rows: &[Vec<f64>]) -> Result<()> {
+    write_csv_ids(path, header, 0, rows)
+}
+
+/// [`write_csv`] whose first `ids` columns hold identifiers (node tags,
+/// obstacle and mode numbers): written as integers, not as 1.0e0.
+pub fn write_csv_ids(path: &Path, header: &[&str], ids: usize, rows: &[Vec<f64>]) -> Result<()> {
     let err = |e: csv::Error| Error::write(path, e);
     let mut w = csv::Writer::from_path(path).map_err(err)?;
     w.write_record(header).map_err(err)?;
@@ -34,8 +40,14 @@ pub fn write_csv(path: &Path, header: &[&str], rows: &[Vec<f64>]) -> Result<()> 
                 ),
             ));
         }
-        w.write_record(row.iter().map(|&x| csv_number(x)))
-            .map_err(err)?;
+        w.write_record(row.iter().enumerate().map(|(k, &x)| {
+            if k < ids {
+                format!("{}", x as u64)
+            } else {
+                csv_number(x)
+            }
+        }))
+        .map_err(err)?;
     }
     w.flush().map_err(|e| Error::write(path, e))
 }

@@ -11,6 +11,8 @@ use std::path::Path;
 pub enum PointData<'a> {
     Scalar(&'a str, Vec<f64>),
     Vector(&'a str, Vec<Vector3<f64>>),
+    /// Identifiers (node or element tags of the mesh file), as integers.
+    Tags(&'a str, &'a [usize]),
 }
 
 fn io(path: &Path) -> impl Fn(std::io::Error) -> Error + '_ {
@@ -41,6 +43,15 @@ fn data_arrays(s: &mut String, data: &[PointData]) {
                 );
                 for x in v {
                     let _ = writeln!(s, "{:.10e}", finite(*x));
+                }
+            }
+            PointData::Tags(name, v) => {
+                let _ = writeln!(
+                    s,
+                    r#"<DataArray type="Int64" Name="{name}" format="ascii">"#
+                );
+                for x in *v {
+                    let _ = writeln!(s, "{x}");
                 }
             }
             PointData::Vector(name, v) => {

@@ -36,6 +36,7 @@ pub fn build_model(scene: &ShellScene) -> Result<ShellModel> {
         .keys()
         .map(|d| (d.node, d.component.offset()))
         .collect();
+    m.node_tags = scene.mesh.node_tags.clone();
     m.set_constraints(&fixed);
     let mut prescribed = vec![0.0; PER_NODE * m.n_nodes()];
     for (d, v) in &scene.fixed {
@@ -109,7 +110,7 @@ pub fn build_model(scene: &ShellScene) -> Result<ShellModel> {
                 key: format!("obstacle[{ob}]"),
                 problem: format!(
                     "contact node {} at {:?} has initial gap {h0:e}: eq. (3) needs delta = h0 > 0 (the node starts on or inside the obstacle)",
-                    node + 1,
+                    scene.mesh.node_tags[node],
                     scene.mesh.nodes[node].as_slice()
                 ),
             })?;

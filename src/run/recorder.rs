@@ -8,7 +8,7 @@ use super::probe::{self, State};
 use crate::error::{Error, Result};
 use crate::fe::dof::{Component, node_vector};
 use crate::mesh::Vec3;
-use crate::output::vtk::{PointData, write_vtu};
+use crate::output::vtk::{PointData, write_vtu_cells};
 use crate::scene::shell::ShellScene;
 use crate::shell::ShellModel;
 use serde::{Deserialize, Serialize};
@@ -431,16 +431,19 @@ impl<'s> Recorder<'s> {
                 .zip(&s.displacement)
                 .map(|(a, b)| Vec3::new(a[0] + b[0], a[1] + b[1], a[2] + b[2]))
                 .collect();
-        write_vtu(
+        let mesh = &self.scene.mesh;
+        write_vtu_cells(
             &d.join(name),
             &x,
-            &self.scene.mesh.quads,
+            &mesh.quads,
             &[
                 PointData::Vector("displacement", v(&s.displacement)),
                 PointData::Vector("director", v(&s.director)),
                 PointData::Vector("contact_force", v(&s.force)),
                 PointData::Scalar("contact_reaction", s.reaction),
+                PointData::Tags("node", &mesh.node_tags),
             ],
+            &[PointData::Tags("element", &mesh.quad_tags)],
         )?;
         self.state.pvd.push((lambda, 0, name.to_string()));
         Ok(())

@@ -15,7 +15,7 @@ use crate::error::{Error, Result};
 use crate::linalg::LinearSolver;
 use crate::output::plot::{Curve, Panel, draw};
 use crate::output::vtk::{cylinder_surface, revolved_surface, write_pvd, write_vtu};
-use crate::output::{Stop, write_csv, write_json};
+use crate::output::{Stop, write_csv_ids, write_json};
 use crate::scene::shell::{Branch, Method, ShellScene, load};
 use crate::series::bifurcation::{self, Event};
 use crate::series::correct::Metric;
@@ -1207,7 +1207,7 @@ fn finish_files(rec: &mut Recorder, model: &ShellModel, full: &[f64], lambda: f6
     for c in super::probe::contacts(model, full, lambda) {
         let x0 = model.x0[c.node];
         rows.push(vec![
-            (c.node + 1) as f64,
+            model.node_tag(c.node) as f64,
             c.obstacle as f64,
             x0[0],
             x0[1],
@@ -1220,11 +1220,12 @@ fn finish_files(rec: &mut Recorder, model: &ShellModel, full: &[f64], lambda: f6
         ]);
     }
     if !rows.is_empty() {
-        write_csv(
+        write_csv_ids(
             &d.join("contact_final.csv"),
             &[
                 "node", "obstacle", "X", "Y", "Z", "gap", "rn", "fx", "fy", "fz",
             ],
+            2,
             &rows,
         )?;
     }
@@ -1305,6 +1306,7 @@ fn write_fields(path: &Path, scene: &ShellScene, snapshots: &[Snapshot]) -> Resu
             ("units", "scene units; director dimensionless"),
         ],
     )?;
+    w.write_tags("node_tags", &scene.mesh.node_tags)?;
     let flat = |v: &[[f64; 3]]| v.iter().flatten().copied().collect::<Vec<f64>>();
     for s in snapshots {
         let coords: Vec<[f64; 3]> =

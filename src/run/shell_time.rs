@@ -464,20 +464,20 @@ fn report(
     let last = run.samples.last().expect("the sample at t = 0");
     let (stop, stop_t, stop_node, stop_message) = match &run.stop {
         TimeStop::End => ("end", last.t, None, None),
-        TimeStop::Singularity { t, node } => ("singularity", *t, Some(node + 1), None),
+        TimeStop::Singularity { t, node } => ("singularity", *t, Some(*node), None),
         TimeStop::Interrupted { t } => ("interrupted", *t, None, None),
         TimeStop::Failed {
             t,
             kind,
             node,
             message,
-        } => (*kind, *t, node.map(|n| n + 1), Some(message.clone())),
+        } => (*kind, *t, *node, Some(message.clone())),
     };
     let mut report = TimeReport {
         scene: scene.file.display().to_string(),
         dofs: dae.model.ndof(),
         friction_nodes: last.friction.len(),
-        nodes_without_friction: run.skipped.iter().map(|n| n + 1).collect(),
+        nodes_without_friction: run.skipped.iter().map(|&n| dae.model.node_tag(n)).collect(),
         steps: run.stats.steps,
         time_step: scene
             .friction
@@ -565,7 +565,10 @@ fn report(
         for f in &last.friction {
             let speed = f.slip.norm();
             let (state, _) = friction_state(&law, speed);
-            let mut rec = vec![(f.node + 1).to_string(), f.obstacle.to_string()];
+            let mut rec = vec![
+                dae.model.node_tag(f.node).to_string(),
+                f.obstacle.to_string(),
+            ];
             rec.extend(
                 [
                     f.gap, f.rn, f.force[0], f.force[1], f.force[2], f.slip[0], f.slip[1],
@@ -655,8 +658,10 @@ fn write_fields(path: &Path, scene: &ShellScene, dae: &FrictionDae, s: &TimeSamp
             PointData::Vector("slip_velocity", slip),
             PointData::Scalar("slip_speed", speed),
             PointData::Scalar("stick", stick),
+            PointData::Tags("node", &scene.mesh.node_tags),
         ],
         &[
+            PointData::Tags("element", &scene.mesh.quad_tags),
             PointData::Scalar("stress_along", cell(|m| m.along)),
             PointData::Scalar("stress_across", cell(|m| m.across)),
             PointData::Scalar("stress_shear", cell(|m| m.shear)),

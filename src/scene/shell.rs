@@ -683,8 +683,10 @@ pub fn load(path: &Path) -> Result<ShellScene> {
         return Err(c.fail(
             "mesh.file",
             format!(
-                "{}: two nodes at ({}, {}, {}) coincide (distance {d:.1e}, mesh.node_tolerance {tol:.1e}) but share no element ({}; {}): the shell is cut there. Merge them (gmsh: Coherence Mesh), or set mesh.coincident_nodes = \"keep\" for an intended cut",
+                "{}: nodes {} and {} at ({}, {}, {}) coincide (distance {d:.1e}, mesh.node_tolerance {tol:.1e}) but share no element ({}; {}): the shell is cut there. Merge them (gmsh: Coherence Mesh), or set mesh.coincident_nodes = \"keep\" for an intended cut",
                 mesh.file.display(),
+                mesh.node_tags[a],
+                mesh.node_tags[b],
                 x.x,
                 x.y,
                 x.z,

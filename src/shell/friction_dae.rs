@@ -190,7 +190,7 @@ impl FrictionDae {
                 at: s.t,
                 what: format!(
                     "contact gap of node {} (on the obstacle axis)",
-                    pair.node + 1
+                    self.model.node_tag(pair.node)
                 ),
             })?;
             let mut fp = FrictionPair::new(
@@ -211,7 +211,10 @@ impl FrictionDae {
                     step: 0,
                     param: "t",
                     at: s.t,
-                    what: format!("node {} lies on the obstacle axis", pair.node + 1),
+                    what: format!(
+                        "node {} lies on the obstacle axis",
+                        self.model.node_tag(pair.node)
+                    ),
                 })?);
             self.chart_start
                 .push(self.charts[self.charts.len() - 1].eval(&x, w));

@@ -103,6 +103,9 @@ struct PairSeries {
 
 pub struct ShellModel {
     pub x0: Vec<Vec3>,
+    /// The number each node goes by in outputs and messages (the mesh's
+    /// `node_tags`: gmsh tags, or 1-based indices); see [`Self::node_tag`].
+    pub node_tags: Vec<usize>,
     pub a30: Vec<Vec3>,
     pub elements: Vec<ShellElement>,
     /// Full dof (6 node + k, k = 0..3 v, 3..6 w) to free-dof index.
@@ -163,6 +166,18 @@ pub struct ShellModel {
 }
 
 impl ShellModel {
+    /// The number users know node `n` (0-based) by: its tag in the mesh
+    /// file, or n + 1 for a built-in mesh.
+    pub fn node_tag(&self, n: usize) -> usize {
+        self.node_tags[n]
+    }
+
+    /// An unknown of the full vector as users read it: "node <tag> <component>".
+    pub fn dof_label(&self, i: usize) -> String {
+        let d = Dof::of_index(i);
+        format!("node {} {}", self.node_tag(d.node), d.component)
+    }
+
     /// Distinct element maps (geometric_map::share).
     pub fn distinct_maps(&self) -> usize {
         self.distinct_maps
@@ -202,6 +217,7 @@ impl ShellModel {
         }
         let n = x0.len();
         let mut m = Self {
+            node_tags: (1..=n).collect(),
             x0,
             a30,
             elements,
@@ -496,7 +512,10 @@ impl ShellModel {
             step: 0,
             param: "lambda",
             at: lambda,
-            what: format!("contact gap of node {node} (on the obstacle axis)"),
+            what: format!(
+                "contact gap of node {} (on the obstacle axis)",
+                self.node_tag(node)
+            ),
         }
     }
 
@@ -595,13 +614,13 @@ impl ShellModel {
         })
     }
 
-    fn check_finite(v: &[f64], lambda: f64, what: &str) -> Result<()> {
+    fn check_finite(&self, v: &[f64], lambda: f64, what: &str) -> Result<()> {
         if let Some(i) = v.iter().position(|x| !x.is_finite()) {
             return Err(Error::NonFinite {
                 step: 0,
                 param: "lambda",
                 at: lambda,
-                what: format!("{what} (entry {i}: {})", Dof::of_index(i)),
+                what: format!("{what} (entry {i}: {})", self.dof_label(i)),
             });
         }
         Ok(())
@@ -641,7 +660,7 @@ impl ShellModel {
                 return Err(Error::ContactMissed {
                     param: "lambda",
                     at: lambda,
-                    node: p.node + 1,
+                    node: self.node_tag(p.node),
                     obstacle: p.obstacle,
                     gap: g.h,
                     distance: self.search_distance,
@@ -1135,7 +1154,7 @@ impl ContinuationProblem for ShellModel {
         let r = self.residual_with(&full, lambda, Some(&mut kept));
         self.state_kg = (full, kept);
         let r = r?;
-        Self::check_finite(&r, lambda, "residual")?;
+        self.check_finite(&r, lambda, "residual")?;
         Ok(self.reduce(&r))
     }
 
@@ -1310,7 +1329,7 @@ impl ContinuationProblem for ShellModel {
                 step: 0,
                 param: "lambda",
                 at: lambda,
-                what: format!("tangent matrix (entry {row}: {})", Dof::of_index(i)),
+                what: format!("tangent matrix (entry {row}: {})", self.dof_label(i)),
             });
         }
         Ok((k, self.reduce(&rl)))
@@ -1484,7 +1503,7 @@ impl ContinuationProblem for ShellModel {
                 rhs[dof(node, k)] -= f[k];
             }
         }
-        Self::check_finite(&rhs, lambda[0], "series right-hand side")?;
+        self.check_finite(&rhs, lambda[0], "series right-hand side")?;
         Ok(self.reduce(&rhs))
     }
 }

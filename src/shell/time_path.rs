@@ -90,7 +90,7 @@ pub struct TimeSample {
 pub enum TimeStop {
     End,
     /// The series became geometric: a singular point at time t, the node
-    /// whose unknowns carry the largest last term.
+    /// (its tag) whose unknowns carry the largest last term.
     Singularity {
         t: f64,
         node: usize,
@@ -106,7 +106,8 @@ pub enum TimeStop {
     Failed {
         t: f64,
         kind: &'static str,
-        /// The node (0-based) the diagnosis names, if any.
+        /// The node the diagnosis names, if any (its tag,
+        /// `ShellModel::node_tag`).
         node: Option<usize>,
         message: String,
     },
@@ -264,7 +265,7 @@ fn integrate(
                     "step budget solver.max_steps = {} spent before t_end = {:.6e} s; node {} carries the largest last series term: the budget may be too small for the run (raise solver.max_steps), the quasi-static solution may cease to exist there (e.g. a pull above what friction can hold), or the regularized law makes the problem stiff (full slip at small omega: docs/shell-friction.md)",
                     cfg.max_steps,
                     cfg.t_end,
-                    largest_node(dae, &series.u[n_ord]) + 1
+                    largest_node(dae, &series.u[n_ord])
                 ),
                 node: Some(largest_node(dae, &series.u[n_ord])),
             });
@@ -285,7 +286,7 @@ fn integrate(
                 what: format!(
                     "step length collapsed to {a:.3e} s after {} steps; node {} carries the largest last series term",
                     stats.steps,
-                    largest_node(dae, &series.u[n_ord]) + 1
+                    largest_node(dae, &series.u[n_ord])
                 ),
                 node: Some(largest_node(dae, &series.u[n_ord])),
             });
@@ -453,7 +454,8 @@ fn evaluate(dae: &FrictionDae, series: &StepSeries, s: &TimeState, a: f64) -> Ti
     TimeState { t: s.t + a, u, w }
 }
 
-/// The node (0-based) whose free dofs carry the largest entry of a term.
+/// The tag (`ShellModel::node_tag`) of the node whose free dofs carry the
+/// largest entry of a term.
 fn largest_node(dae: &FrictionDae, term: &[f64]) -> usize {
     let (k, _) =
         term.iter().enumerate().fold(
@@ -532,7 +534,7 @@ fn run_implicit(
                     cfg.max_steps,
                     cfg.t_end,
                     stats.rejected,
-                    node_of_dof(dae, last_dof) + 1
+                    node_of_dof(dae, last_dof)
                 ),
                 node: Some(node_of_dof(dae, last_dof)),
             });
@@ -681,7 +683,7 @@ fn run_implicit(
                 let infeasible = match worst {
                     Some((node, q)) if q > 1.0 => format!(
                         "; at the step start node {} carries a residual force {q:.2} times its friction cap f |R_N|_reg, which no slip velocity balances (a larger friction.zeta or friction.omega may run)",
-                        node + 1
+                        dae.model.node_tag(node)
                     ),
                     _ => String::new(),
                 };
@@ -691,7 +693,7 @@ fn run_implicit(
                     what: format!(
                         "implicit step length collapsed to {length:.3e} s after {} steps: {diagnosis}; node {} carries the largest error estimate: the quasi-static solution may cease to exist here (e.g. a pull above what friction can hold){infeasible}",
                         stats.steps,
-                        node_of_dof(dae, last_dof) + 1
+                        node_of_dof(dae, last_dof)
                     ),
                     node: Some(node_of_dof(dae, last_dof)),
                 });
@@ -736,13 +738,15 @@ fn run_implicit(
 /// (the Rosenbrock stages are tried again after).
 pub const NEWTON_STEPS: usize = 4;
 
-/// The node (0-based) of a free dof.
+/// The tag (`ShellModel::node_tag`) of the node of a free dof.
 fn node_of_dof(dae: &FrictionDae, k: usize) -> usize {
-    dae.model
+    let node = dae
+        .model
         .free
         .iter()
         .position(|f| *f == Some(k))
-        .map_or(0, |full| full / crate::fe::dof::PER_NODE)
+        .map_or(0, |full| full / crate::fe::dof::PER_NODE);
+    dae.model.node_tag(node)
 }
 
 /// The solution at time t: the full vector, and per friction node R_N,
@@ -762,7 +766,10 @@ fn sample(dae: &FrictionDae, s: &TimeState, t: f64) -> Result<TimeSample> {
             step: 0,
             param: "t",
             at: t,
-            what: format!("contact gap of node {} (on the obstacle axis)", node + 1),
+            what: format!(
+                "contact gap of node {} (on the obstacle axis)",
+                dae.model.node_tag(node)
+            ),
         })?;
         let (t1, t2) = match ob {
             crate::contact::Obstacle::Plane { normal, .. } => {

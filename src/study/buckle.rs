@@ -370,7 +370,7 @@ pub fn buckle(
                 ]
             })
             .collect();
-        crate::output::write_csv(
+        crate::output::write_csv_ids(
             &d.join("buckle.csv"),
             &[
                 "mode",
@@ -380,6 +380,7 @@ pub fn buckle(
                 "half_waves",
                 "wavelength",
             ],
+            1,
             &rows,
         )?;
     }

@@ -9,6 +9,7 @@ mod common;
 mod scratch;
 
 mod interrupt_resume;
+mod node_tags;
 mod numerical_stop;
 mod reused_output;
 mod stability;

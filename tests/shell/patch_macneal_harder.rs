@@ -45,6 +45,7 @@ fn patch() -> Mesh {
     groups.insert("boundary".to_string(), vec![0, 1, 2, 3]);
     Mesh {
         file: "<MacNeal-Harder patch>".into(),
+        node_tags: (1..=nodes.len()).collect(),
         nodes,
         quad_lines: vec![0; 5],
         quad_tags: (1..=5).collect(),
