@@ -37,6 +37,7 @@ pub fn build_model(scene: &ShellScene) -> Result<ShellModel> {
         .map(|d| (d.node, d.component.offset()))
         .collect();
     m.node_tags = scene.mesh.node_tags.clone();
+    m.length_scale = scene.length_scale;
     m.set_constraints(&fixed);
     let mut prescribed = vec![0.0; PER_NODE * m.n_nodes()];
     for (d, v) in &scene.fixed {

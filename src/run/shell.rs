@@ -364,7 +364,6 @@ fn run_inner(
     }
     let start = Instant::now();
     let mut model = build_model(scene)?;
-    model.length_scale = scene.length_scale;
     model.contact_arclength = scene.contact_arclength;
     let n_dof = model.ndof();
     let mut cfg = scene.solver.clone();
@@ -649,8 +648,7 @@ fn run_inner(
             let load_control = ncfg.control == crate::series::newton::Control::Load;
             let brackets = &mut newton_brackets;
             // The engine holds the model; probes read a second instance.
-            let mut view = build_model(scene)?;
-            view.length_scale = scene.length_scale;
+            let view = build_model(scene)?;
             let m = &view;
             let result = crate::series::newton::run(
                 &mut model,

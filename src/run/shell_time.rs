@@ -91,7 +91,6 @@ pub fn problem(scene: &ShellScene) -> Result<FrictionDae> {
         problem: "a run in time needs [friction]".into(),
     })?;
     let mut model = build_model(scene)?;
-    model.length_scale = scene.length_scale;
     // The obstacles keep their place (scene::shell checks that a
     // translation keeps the surface in place); their motion enters the
     // surface velocity only.

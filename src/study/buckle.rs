@@ -119,7 +119,6 @@ struct BaseState {
 /// The ANM path of a scene without friction up to `lambda_base`.
 fn lambda_base_state(scene: &ShellScene, lambda_base: f64) -> Result<BaseState> {
     let mut model = build_model(scene)?;
-    model.length_scale = scene.length_scale;
     let mut cfg = scene.solver.clone();
     cfg.lambda_scale = cfg.lambda_end.abs();
     let mut u0 = vec![0.0; model.ndof()];

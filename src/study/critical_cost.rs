@@ -84,7 +84,6 @@ pub fn newton_bisection(scene: &ShellScene, increment: f64, tol: f64) -> Result<
         });
     }
     let mut model = build_model(scene)?;
-    model.length_scale = scene.length_scale;
     let metric = Metric::for_problem(&model, cfg.lambda_end.abs())?;
     let mut lu = LinearSolver::new(cfg.linear);
     let mut stats = Stats::default();

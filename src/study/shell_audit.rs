@@ -386,7 +386,7 @@ impl Sweep for ShellAudit {
             .collect()
     }
     fn inputs(&self) -> Vec<PathBuf> {
-        vec![self.scene.file.clone()]
+        sweep::scene_inputs(&self.scene)
     }
     fn run_item(&self, k: usize, _dir: Option<&Path>) -> Result<serde_json::Value> {
         let (name, v, s) = &self.jobs[k];
@@ -457,7 +457,7 @@ pub fn markdown(scene: &ShellScene, rows: &[ShellAuditRow]) -> String {
         scene.file.display(),
     );
     s += &format!(
-        "| parameter | value | stop | lambda | {key}({end}) | deviation | {contact}({end}) (N) | deviation | trajectory deviation | contact Fx, Fz (N) | support Fx, Fz (N) | abs(P + C + S)/abs(P) | max abs(R)/abs(F) | far nodes | steps | factorizations | wall (s) | reference |\n"
+        "| parameter | value | stop | lambda | {key}({end}) | deviation | {contact}({end}) (N) | deviation | trajectory deviation | contact Fx, Fz (N) | support Fx, Fz (N) | abs(P + C + S)/abs(P) | max abs(R)/abs(R_lambda) | far nodes | steps | factorizations | wall (s) | reference |\n"
     );
     s += "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
     for r in rows {

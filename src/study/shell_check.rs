@@ -1,7 +1,8 @@
 //! Checks of a shell run against the equations it claims to solve,
 //! from its output only (the mid-surface snapshots: the state per node, and
 //! the contact forces the run reports):
-//! - the full residual |R(U, lambda)| / |F| over the free dofs, re-evaluated
+//! - the full residual |R(U, lambda)| / |R_lambda| over the free dofs, in
+//!   the engine's unit-free norm (`Metric::residual_norm`), re-evaluated
 //!   on a freshly built model in which *every* candidate node carries the
 //!   contact law (eq. 3): the stated problem, not the truncated one the run
 //!   solved (DESIGN §3), so the pulls of skipped nodes count;
@@ -20,15 +21,17 @@
 use crate::error::Result;
 use crate::fe::dof::{Component, Dof};
 use crate::run::RunReport;
-use crate::run::build::{build_model, load_norm};
+use crate::run::build::build_model;
 use crate::scene::shell::ShellScene;
+use crate::series::continuation::ContinuationProblem;
+use crate::series::correct::Metric;
 use crate::shell::ShellModel;
 
 /// What the checks measured.
 #[derive(Clone, Debug)]
 pub struct ShellCheck {
-    /// max over the checked points of |R(U, lambda)| / |F| (free dofs, every
-    /// candidate active); infinite when a point has a non-finite value or an
+    /// max over the checked points of |R(U, lambda)| / |R_lambda| (free
+    /// dofs, every candidate active, unit-free norm); infinite when a point has a non-finite value or an
     /// undefined gap.
     pub max_residual: f64,
     /// The lambda of that maximum.
@@ -55,21 +58,25 @@ pub fn with_grid_snapshots(scene: &ShellScene) -> ShellScene {
     s
 }
 
-/// |R(U, lambda)| / |F| over the free dofs, every candidate active.
-fn relative_residual(model: &mut ShellModel, full: &[f64], lambda: f64, f_norm: f64) -> f64 {
+/// |R(U, lambda)| / |R_lambda| over the free dofs, every candidate active,
+/// in the engine's unit-free norm (`Metric::residual_norm`: R_i times the
+/// scale of its unknown, so that a moment on a director and a force on a
+/// displacement count alike, whatever the length unit; review 7: the plain
+/// norm weighed the moments 1000 times more in mm than in m).
+fn relative_residual(
+    model: &mut ShellModel,
+    metric: &Metric,
+    full: &[f64],
+    lambda: f64,
+    f_norm: f64,
+) -> f64 {
     if full.iter().any(|x| !x.is_finite()) {
         return f64::INFINITY;
     }
     model.update_active(full, lambda);
     match model.residual_full(full, lambda) {
         Ok(r) => {
-            let n = r
-                .iter()
-                .zip(&model.free)
-                .filter(|(_, f)| f.is_some())
-                .map(|(x, _)| x * x)
-                .sum::<f64>()
-                .sqrt();
+            let n = metric.residual_norm(&model.reduce(&r));
             if n.is_finite() {
                 n / f_norm
             } else {
@@ -86,7 +93,14 @@ pub fn check(scene: &ShellScene, report: &RunReport) -> Result<ShellCheck> {
     let mut model = build_model(scene)?;
     // The stated problem: eq. (3) at every candidate node.
     model.search_distance = f64::INFINITY;
-    let f_norm = load_norm(&model);
+    // As the run's grid points: against |R_lambda| at the start, in the
+    // same norm (run::shell).
+    let metric = Metric::for_problem(&model, scene.solver.lambda_end.abs())?;
+    let zero = vec![0.0; model.ndof()];
+    let f_norm = {
+        let (_, rl) = model.tangent(&zero, 0.0)?;
+        metric.residual_norm(&rl).max(f64::MIN_POSITIVE)
+    };
     let mut out = ShellCheck {
         max_residual: 0.0,
         worst_lambda: f64::NAN,
@@ -97,7 +111,7 @@ pub fn check(scene: &ShellScene, report: &RunReport) -> Result<ShellCheck> {
     };
     for snap in &report.snapshots {
         let full = &snap.state;
-        let r = relative_residual(&mut model, full, snap.lambda, f_norm);
+        let r = relative_residual(&mut model, &metric, full, snap.lambda, f_norm);
         out.points += 1;
         if !(r <= out.max_residual) {
             out.max_residual = r;

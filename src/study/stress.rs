@@ -135,7 +135,7 @@ impl StressJob {
         | StressJob::Shell {
             scene, axis, value, ..
         }) = self;
-        format!("{scene}/{axis}={value:e}")
+        format!("{scene}/{axis}={}", value_text(axis, *value))
     }
 }
 
@@ -195,7 +195,7 @@ pub fn run_job(job: &StressJob) -> StressCase {
             Ok::<_, crate::Error>((report, c))
         })
         .map_or_else(failed, |r| {
-            shell_case(scene.clone(), axis, *value, *uz_ref, r)
+            shell_case(scene.clone(), axis, *value, *uz_ref, s.units.length, r)
         }),
     }
 }
@@ -345,6 +345,7 @@ fn shell_case(
     axis: &'static str,
     value: f64,
     uz_ref: Option<f64>,
+    length: &str,
     r: Result<(crate::run::RunReport, super::shell_check::ShellCheck)>,
 ) -> StressCase {
     match r {
@@ -359,7 +360,7 @@ fn shell_case(
             }
             if !(c.max_residual <= TOLERANCE) {
                 problems.push(format!(
-                    "residual |R|/|F| = {:.2e} > {TOLERANCE:e} at lambda = {}",
+                    "residual |R|/|R_lambda| = {:.2e} > {TOLERANCE:e} at lambda = {}",
                     c.max_residual, c.worst_lambda
                 ));
             }
@@ -367,7 +368,7 @@ fn shell_case(
                 let got = uz1.unwrap_or(f64::NAN);
                 if !((got - want).abs() <= UZ_A_TOLERANCE) {
                     problems.push(format!(
-                        "uz_A(1) = {got:.7} m differs from the canonical {want} m by more than {UZ_A_TOLERANCE:e} m"
+                        "uz_A(1) = {got:.7} {length} differs from the canonical {want} {length} by more than {UZ_A_TOLERANCE:e} {length}"
                     ));
                 }
             }
@@ -395,8 +396,8 @@ fn shell_case(
                 wall_s: run.wall_s,
                 detail: format!(
                     "uz_A(1) = {}{}; max residual at lambda = {} over {} grid points; {}",
-                    uz1.map_or("not reached".into(), |u| format!("{u:.7} m")),
-                    uz_ref.map_or(String::new(), |u| format!(" (canonical {u} m)")),
+                    uz1.map_or("not reached".into(), |u| format!("{u:.7} {length}")),
+                    uz_ref.map_or(String::new(), |u| format!(" (canonical {u} {length})")),
                     c.worst_lambda,
                     c.points,
                     if run.far_nodes_skipped {
@@ -446,8 +447,11 @@ pub fn markdown(cases: &[StressCase]) -> String {
                     Verdict::Failed => "**FAILED**",
                 };
                 format!(
-                    "{:e}: {v} ({}, {}, {:.1e})",
-                    c.value, c.stop, c.steps, c.residual
+                    "{}: {v} ({}, {}, {:.1e})",
+                    value_text(&c.axis, c.value),
+                    c.stop,
+                    c.steps,
+                    c.residual
                 )
             })
             .collect();
@@ -461,7 +465,13 @@ pub fn markdown(cases: &[StressCase]) -> String {
         s += "\n";
     }
     for c in notes {
-        s += &format!("- {} {} = {:e}: {:?}", c.scene, c.axis, c.value, c.verdict);
+        s += &format!(
+            "- {} {} = {}: {:?}",
+            c.scene,
+            c.axis,
+            value_text(&c.axis, c.value),
+            c.verdict
+        );
         if !c.message.is_empty() {
             s += &format!(": {}", c.message);
         }
@@ -471,6 +481,16 @@ pub fn markdown(cases: &[StressCase]) -> String {
         s += "\n";
     }
     s
+}
+
+/// A value of an axis as written: orders as integers (`order=40`, not
+/// `4e1`), regularizations and stiffnesses in exponent form (`eta=1e-6`).
+fn value_text(axis: &str, value: f64) -> String {
+    if axis == "order" {
+        format!("{value}")
+    } else {
+        format!("{value:e}")
+    }
 }
 
 /// Writes stress.md and stress.csv into `dir`.
@@ -501,7 +521,7 @@ pub fn write(cases: &[StressCase], dir: &Path) -> Result<()> {
         w.write_record([
             c.scene.clone(),
             c.axis.to_string(),
-            format!("{:e}", c.value),
+            value_text(&c.axis, c.value),
             format!("{:?}", c.verdict),
             c.stop.clone(),
             c.steps.to_string(),
@@ -541,6 +561,8 @@ impl StressSweep {
                             problem: "`anm stress` varies the static path in lambda of a shell scene (eta, K, order); a scene with [friction] runs in time: stress it with `anm audit` (its sweeps in time) or runs of its own".into(),
                         });
                     }
+                    // The mesh file too: the merge refuses a changed one.
+                    inputs.extend(sweep::scene_inputs(&shell).into_iter().skip(1));
                     shells.push((name.clone(), shell))
                 }
                 kind => friction.push(crate::scene::friction::load(&path, &text, kind)?),

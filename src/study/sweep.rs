@@ -14,10 +14,13 @@
 //! - `anm audit ... --list-items`: the items, `K<TAB>label` per line.
 //!
 //! `DIR/sweep.json` (the manifest) holds the sweep's arguments, the labels of
-//! its items and the text of the scene files it read; every `--item` process
-//! writes it (or checks that the one in DIR is the same sweep), so `anm merge
-//! DIR` needs no arguments and cannot be given other ones than the items ran
-//! with, and refuses a scene changed since.
+//! its items and a digest of every file it read (scenes, and the mesh files
+//! they read); every `--item` process writes it (or checks that the one in
+//! DIR is the same sweep), so `anm merge DIR` needs no arguments and cannot
+//! be given other ones than the items ran with, and refuses a scene or mesh
+//! changed since. Each item file carries the digest of the manifest it ran
+//! under: an item copied from another sweep's DIR is refused, even with the
+//! same number and label (review 7).
 //!
 //! Floats in the item files and the manifest are written as strings of
 //! Rust's shortest round-trip form ("0.705805084", "1e-8", "NaN", "inf"):
@@ -32,8 +35,10 @@ use serde::de::{self, Deserializer, Visitor};
 use serde::{Deserialize, Serialize, Serializer};
 use std::path::{Path, PathBuf};
 
-/// Version of the manifest and item files.
-pub const FORMAT: u32 = 1;
+/// Version of the manifest and item files (2: digests of the inputs instead
+/// of their text, the mesh files among them, and the manifest's digest in
+/// each item file).
+pub const FORMAT: u32 = 2;
 
 /// A float written as a string that reads back bit for bit (see the module
 /// doc); reads JSON numbers too.
@@ -176,11 +181,28 @@ pub enum Spec {
     },
 }
 
-/// A file the sweep read, with its text: the merge refuses a changed one.
+/// A file the sweep read, with the FNV-1a digest of its bytes
+/// (`mesh::digest`): the merge refuses a changed one. A digest, not the
+/// text: a mesh file may hold millions of nodes.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Input {
     pub file: PathBuf,
-    pub text: String,
+    pub digest: String,
+}
+
+/// The files a shell scene reads: the scene, and its mesh file unless the
+/// mesh is built in.
+pub fn scene_inputs(scene: &crate::scene::shell::ShellScene) -> Vec<PathBuf> {
+    let mut files = vec![scene.file.clone()];
+    if scene.mesh.digest.is_some() {
+        files.push(scene.mesh.file.clone());
+    }
+    files
+}
+
+fn file_digest(file: &Path) -> Result<String> {
+    let bytes = std::fs::read(file).map_err(io(file))?;
+    Ok(crate::mesh::digest(&bytes))
 }
 
 /// `DIR/sweep.json`.
@@ -235,8 +257,8 @@ pub fn manifest(spec: &Spec, sweep: &dyn Sweep) -> Result<Manifest> {
         .inputs()
         .into_iter()
         .map(|file| {
-            let text = std::fs::read_to_string(&file).map_err(io(&file))?;
-            Ok(Input { file, text })
+            let digest = file_digest(&file)?;
+            Ok(Input { file, digest })
         })
         .collect::<Result<_>>()?;
     Ok(Manifest {
@@ -323,7 +345,7 @@ fn prepare(dir: &Path, m: &Manifest, fresh: bool) -> Result<()> {
             let what = if there.spec != m.spec || there.items != m.items {
                 "the items of another sweep"
             } else {
-                "items run on other scene files (their text changed)"
+                "items run on other input files (a scene or mesh file changed)"
             };
             return Err(Error::Invalid {
                 file,
@@ -342,16 +364,34 @@ fn prepare(dir: &Path, m: &Manifest, fresh: bool) -> Result<()> {
 #[derive(Serialize, Deserialize)]
 struct ItemFile {
     format: u32,
+    /// The digest of the manifest the item ran under ([`Manifest::digest`]).
+    sweep: String,
     item: usize,
     label: String,
     result: serde_json::Value,
 }
 
-fn write_item(dir: &Path, k: usize, label: &str, result: serde_json::Value) -> Result<()> {
+impl Manifest {
+    /// FNV-1a of the manifest's JSON text: what an item file names its
+    /// sweep by.
+    pub fn digest(&self) -> Result<String> {
+        let text = serde_json::to_string(self).map_err(|e| Error::write("sweep.json", e))?;
+        Ok(crate::mesh::digest(text.as_bytes()))
+    }
+}
+
+fn write_item(
+    dir: &Path,
+    sweep: &str,
+    k: usize,
+    label: &str,
+    result: serde_json::Value,
+) -> Result<()> {
     let file = item_file(dir, k);
     // Compact: a history is thousands of floats.
     let text = serde_json::to_string(&ItemFile {
         format: FORMAT,
+        sweep: sweep.to_string(),
         item: k,
         label: label.to_string(),
         result,
@@ -363,6 +403,7 @@ fn write_item(dir: &Path, k: usize, label: &str, result: serde_json::Value) -> R
 /// Every item's result from DIR; an error naming the missing items (to run
 /// again with `--item K`) or a file that belongs to another item.
 fn read_items(dir: &Path, m: &Manifest) -> Result<Vec<serde_json::Value>> {
+    let digest = m.digest()?;
     let mut out = vec![];
     let mut missing = vec![];
     for (k, label) in m.items.iter().enumerate() {
@@ -388,7 +429,38 @@ fn read_items(dir: &Path, m: &Manifest) -> Result<Vec<serde_json::Value>> {
                 ),
             });
         }
+        if f.sweep != digest {
+            return Err(Error::Parse {
+                file,
+                message: format!(
+                    "item {k} `{label}` ran in another sweep (manifest digest {}, this DIR's sweep.json {digest}): another scene, mesh or argument; run it again here with --item {k}",
+                    f.sweep
+                ),
+            });
+        }
         out.push(f.result);
+    }
+    // Item files the manifest does not list (a larger sweep's, or a stray
+    // copy): named, since they are left out of the tables.
+    let listed = m.items.len();
+    let mut stray: Vec<usize> = std::fs::read_dir(items_dir(dir))
+        .map_err(io(dir))?
+        .filter_map(|e| e.ok()?.file_name().into_string().ok())
+        .filter_map(|n| n.strip_suffix(".json")?.parse::<usize>().ok())
+        .filter(|&k| k >= listed)
+        .collect();
+    stray.sort_unstable();
+    if !stray.is_empty() {
+        eprintln!(
+            "warning: {}: item files {} are not items of this sweep ({listed} items, 0 to {}): left out",
+            items_dir(dir).display(),
+            stray
+                .iter()
+                .map(|k| format!("{k}.json"))
+                .collect::<Vec<_>>()
+                .join(", "),
+            listed.saturating_sub(1)
+        );
     }
     if !missing.is_empty() {
         return Err(Error::Invalid {
@@ -409,12 +481,12 @@ fn read_items(dir: &Path, m: &Manifest) -> Result<Vec<serde_json::Value>> {
 /// Checks that the files the items read are unchanged.
 fn check_inputs(m: &Manifest) -> Result<()> {
     for i in &m.inputs {
-        let now = std::fs::read_to_string(&i.file).map_err(io(&i.file))?;
-        if now != i.text {
+        if file_digest(&i.file)? != i.digest {
             return Err(Error::Invalid {
                 file: i.file.clone(),
                 key: "sweep".into(),
-                problem: "changed since the items ran: merge the items of one scene".into(),
+                problem: "changed since the items ran: merge the items of one scene and mesh"
+                    .into(),
             });
         }
     }
@@ -439,7 +511,7 @@ pub fn run_one(spec: &Spec, sweep: &dyn Sweep, k: usize, dir: &Path) -> Result<P
     let m = manifest(spec, sweep)?;
     prepare(dir, &m, false)?;
     let result = sweep.run_item(k, Some(dir))?;
-    write_item(dir, k, label, result)?;
+    write_item(dir, &m.digest()?, k, label, result)?;
     Ok(item_file(dir, k))
 }
 
@@ -472,14 +544,17 @@ pub fn run_all(
     open: impl Fn(&Spec) -> Result<Box<dyn Sweep>>,
 ) -> Result<Merged> {
     let labels = sweep.labels();
+    let mut digest = String::new();
     if let Some(dir) = dir {
-        prepare(dir, &manifest(spec, sweep)?, true)?;
+        let m = manifest(spec, sweep)?;
+        prepare(dir, &m, true)?;
+        digest = m.digest()?;
     }
     let job = |k: &usize| -> Result<String> {
         let result = sweep.run_item(*k, dir)?;
         match dir {
             Some(dir) => {
-                write_item(dir, *k, &labels[*k], result)?;
+                write_item(dir, &digest, *k, &labels[*k], result)?;
                 Ok(String::new())
             }
             None => serde_json::to_string(&result).map_err(|e| Error::write("item", e)),

@@ -473,7 +473,7 @@ impl Sweep for TimeAudit {
         self.jobs.iter().map(|(n, v, _)| label(n, *v)).collect()
     }
     fn inputs(&self) -> Vec<PathBuf> {
-        vec![self.scene.file.clone()]
+        sweep::scene_inputs(&self.scene)
     }
     fn run_item(&self, k: usize, _dir: Option<&Path>) -> Result<serde_json::Value> {
         let (name, v, s) = &self.jobs[k];

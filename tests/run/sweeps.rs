@@ -394,3 +394,89 @@ fn scaling_items_merge_to_the_single_process_table() {
     assert_eq!(a, ["20×2 360 2 max_steps", "40×4 1200 2 max_steps"]);
     assert_eq!(a, fixed(&dir.join("items/scaling.md")));
 }
+
+/// Review 7: the manifest held the scene's text but not its mesh, and an
+/// item file only its number and label, so a merge mixed items run on two
+/// meshes, and took another sweep's item copied in, with exit code 0. Now
+/// the manifest holds a digest of the mesh file too and each item file the
+/// digest of its manifest; item files beyond the sweep's are named.
+#[test]
+fn a_merge_refuses_items_of_another_mesh_or_sweep() {
+    let tmp = crate::scratch::scratch("sweeps-mesh");
+    let dir = tmp.path();
+    let mesh = dir.join("m.msh");
+    let copy_mesh = |name: &str| {
+        std::fs::copy(root().join("meshes").join(name), &mesh).unwrap();
+    };
+    copy_mesh("plate-cylinder-20x2.msh");
+    let coarse = read(&root().join("scenes/plate-cylinder-coarse.toml"));
+    let scene = coarse.replace("../meshes/plate-cylinder-20x2.msh", "m.msh");
+    assert_ne!(scene, coarse);
+    std::fs::write(dir.join("a.toml"), &scene).unwrap();
+    std::fs::write(
+        dir.join("b.toml"),
+        scene.replace("order = 15", "order = 10"),
+    )
+    .unwrap();
+    let s = |p: &str| dir.join(p).to_str().unwrap().to_string();
+    let sweep = |scene: &str| -> Vec<String> {
+        ["audit", &s(scene), "--eta", "1e-1,1"]
+            .map(String::from)
+            .to_vec()
+    };
+    let item = |scene: &str, k: &str, out: &str| {
+        let args: Vec<String> = [
+            sweep(scene),
+            vec!["--item".into(), k.into(), "-o".into(), s(out)],
+        ]
+        .concat();
+        anm(&args.iter().map(String::as_str).collect::<Vec<_>>())
+    };
+
+    // Item 0 on the 0.1 m mesh; the mesh regenerated (0.05 m) before item 1.
+    ok("item 0", item("a.toml", "0", "mixed"));
+    copy_mesh("plate-cylinder-40x4.msh");
+    let out = item("a.toml", "1", "mixed");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && err.contains("a scene or mesh file changed"),
+        "{err}"
+    );
+    let out = anm(&["merge", &s("mixed")]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success()
+            && err.contains("m.msh")
+            && err.contains("changed since the items ran"),
+        "{err}"
+    );
+
+    // Both items of scene a, and item 1 of scene b (order 10) copied over
+    // a's item 1: same number, same label, another sweep.
+    copy_mesh("plate-cylinder-20x2.msh");
+    ok("item 1", item("a.toml", "1", "mixed"));
+    ok("merge", anm(&["merge", &s("mixed")]));
+    ok("b item 1", item("b.toml", "1", "other"));
+    std::fs::copy(
+        dir.join("other/items/1.json"),
+        dir.join("mixed/items/1.json"),
+    )
+    .unwrap();
+    let out = anm(&["merge", &s("mixed")]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && err.contains("ran in another sweep"),
+        "{err}"
+    );
+
+    // A stray item file beyond the sweep's items is named.
+    ok("item 1 again", item("a.toml", "1", "mixed"));
+    std::fs::copy(
+        dir.join("mixed/items/0.json"),
+        dir.join("mixed/items/7.json"),
+    )
+    .unwrap();
+    let out = anm(&["merge", &s("mixed")]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success() && err.contains("7.json"), "{err}");
+}
