@@ -581,6 +581,21 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
             out,
             items,
         } => {
+            // A value given twice would run twice and print two rows.
+            for (key, values) in [
+                ("omega", &omega),
+                ("zeta", &zeta),
+                ("eta", &eta),
+                ("penalty", &penalty),
+            ] {
+                if let Some(v) = values
+                    .iter()
+                    .enumerate()
+                    .find_map(|(i, v)| values[..i].contains(v).then_some(v))
+                {
+                    anyhow::bail!("--{key}: {v:e} is given twice");
+                }
+            }
             let spec = anm::study::sweep::Spec::Audit {
                 scene,
                 omega,
@@ -1036,6 +1051,18 @@ fn bench_scaling(
                 .with_context(|| format!("--scaling: `{s}` is not NXxNY with NX, NY >= 1"))
         })
         .collect::<anyhow::Result<_>>()?;
+    // Checked before any size runs (review 7: 30x3 failed after the sizes
+    // before it had run): the plate-cylinder probes and loads need node
+    // rows at x = 1.0, 1.1, 1.2 and nodes at y = 0, ±0.1 (meshes/README.md).
+    if let Some((s, _)) = sizes
+        .iter()
+        .zip(&parsed)
+        .find(|(_, (nx, ny))| nx % 20 != 0 || ny % 2 != 0)
+    {
+        anyhow::bail!(
+            "--scaling: `{s}`: NX must be a multiple of 20 and NY even (the plate-cylinder probes' node rows at x = 1.0, 1.1, 1.2 and the loads' nodes at y = 0, ±0.1: meshes/README.md)"
+        );
+    }
     if steps == 0 {
         anyhow::bail!("--scaling-steps must be >= 1");
     }
@@ -1210,12 +1237,21 @@ fn clear_earlier(
 /// Prints a shell run's summary line; exit code 0 at the end of the path, 2
 /// on a numerical stop, 130 when interrupted.
 fn shell_summary(report: &anm::run::RunReport, out: &std::path::Path) -> ExitCode {
-    let ends: Vec<String> = report
+    let mut ends: Vec<String> = report
         .end
         .iter()
         .filter(|(k, _)| *k != "lambda")
         .map(|(k, v)| format!("{k} = {v:.6e}"))
         .collect();
+    // The probes are those of the last output row, which a stop between
+    // rows leaves behind the stop (review 7: an interrupted run printed
+    // the values of lambda = 0.01 after "stop at lambda = 0.0192").
+    if let (Some(row), Some(stop)) = (report.end.get("lambda"), report.stop.lambda)
+        && (row - stop).abs() > 1e-12 * stop.abs().max(1.0)
+        && !ends.is_empty()
+    {
+        ends[0] = format!("at lambda = {row:.6} (last output row): {}", ends[0]);
+    }
     println!(
         "{}: stop = {} at lambda = {:.6}; {} dofs, {} steps, {} factorizations, {} solves, {:.3} s; {}; outputs in {}",
         report.scene,

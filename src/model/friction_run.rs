@@ -209,7 +209,7 @@ pub fn run(scene: &FrictionScene, out_dir: Option<&Path>, progress: bool) -> Res
             create_dir(dir)?;
             Some((
                 CsvStream::create(&dir.join("history.csv"), model.columns())?,
-                CsvStream::create(&dir.join("steps.csv"), &step_columns(model))?,
+                CsvStream::create(&dir.join("steps.csv"), &step_columns(model))?.with_ids(1),
             ))
         }
         None => None,
@@ -227,7 +227,8 @@ pub fn run(scene: &FrictionScene, out_dir: Option<&Path>, progress: bool) -> Res
         }
         let y = step.eval(t1);
         let mut row = vec![
-            step.index as f64,
+            // 1-based, as the shell runs' steps.csv (review 7).
+            (step.index + 1) as f64,
             t1,
             step.length,
             step.end_residual,

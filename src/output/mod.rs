@@ -18,6 +18,16 @@ pub fn csv_number(x: f64) -> String {
     format!("{:.17e}", x + 0.0)
 }
 
+/// A CSV cell: an identifier as an integer, any other value by
+/// [`csv_number`].
+fn cell(id: bool, x: f64) -> String {
+    if id {
+        format!("{}", x as u64)
+    } else {
+        csv_number(x)
+    }
+}
+
 /// Writes a CSV file with a header row; values in full precision.
 pub fn write_csv(path: &Path, header: &[&str], rows: &[Vec<f64>]) -> Result<()> {
     write_csv_ids(path, header, 0, rows)
@@ -40,14 +50,8 @@ pub fn write_csv_ids(path: &Path, header: &[&str], ids: usize, rows: &[Vec<f64>]
                 ),
             ));
         }
-        w.write_record(row.iter().enumerate().map(|(k, &x)| {
-            if k < ids {
-                format!("{}", x as u64)
-            } else {
-                csv_number(x)
-            }
-        }))
-        .map_err(err)?;
+        w.write_record(row.iter().enumerate().map(|(k, &x)| cell(k < ids, x)))
+            .map_err(err)?;
     }
     w.flush().map_err(|e| Error::write(path, e))
 }
@@ -58,6 +62,8 @@ pub struct CsvStream {
     path: std::path::PathBuf,
     writer: csv::Writer<std::fs::File>,
     header: Vec<String>,
+    /// Leading columns of identifiers (step numbers), written as integers.
+    ids: usize,
 }
 
 impl CsvStream {
@@ -72,7 +78,14 @@ impl CsvStream {
             path: path.to_path_buf(),
             writer,
             header: header.iter().map(|s| s.to_string()).collect(),
+            ids: 0,
         })
+    }
+
+    /// The first `ids` columns hold identifiers: written as integers.
+    pub fn with_ids(mut self, ids: usize) -> Self {
+        self.ids = ids;
+        self
     }
 
     /// Appends a row in full precision; a non-finite value is refused.
@@ -87,8 +100,9 @@ impl CsvStream {
                 ),
             ));
         }
+        let ids = self.ids;
         self.writer
-            .write_record(row.iter().map(|&x| csv_number(x)))
+            .write_record(row.iter().enumerate().map(|(k, &x)| cell(k < ids, x)))
             .and_then(|_| self.writer.flush().map_err(csv::Error::from))
             .map_err(|e| Error::write(&self.path, e))
     }

@@ -895,8 +895,8 @@ fn run_inner(
         })
         .unwrap_or_default();
     let interrupted = matches!(stop, PathStop::Interrupted { .. });
-    if out_dir.is_some() && !interrupted {
-        finish_files(&mut rec, &model, &full_last, lambda_last)?;
+    if out_dir.is_some() {
+        finish_files(&mut rec, &model, &full_last, lambda_last, !interrupted)?;
     }
     if let (Some(d), PathStop::End { .. }) = (out_dir, &stop) {
         // A finished run has nothing to resume.
@@ -945,13 +945,12 @@ fn run_inner(
     };
     if let Some(d) = out_dir {
         write_json(&d.join("summary.json"), &report)?;
-        if !interrupted {
-            if scene.output.hdf5 {
-                write_fields(&d.join("fields.h5"), scene, &report.snapshots)?;
-            }
-            if scene.output.plot && report.history.len() > 1 {
-                probe_plot(&d.join("plot.svg"), scene, "lambda (-)", &report.history, 1)?;
-            }
+        if !interrupted && scene.output.hdf5 {
+            write_fields(&d.join("fields.h5"), scene, &report.snapshots)?;
+        }
+        // Interrupted too: the curves up to the last row (review 7).
+        if scene.output.plot && report.history.len() > 1 {
+            probe_plot(&d.join("plot.svg"), scene, "lambda (-)", &report.history, 1)?;
         }
     }
     Ok(report)
@@ -1156,16 +1155,35 @@ fn skipped_bound(model: &ShellModel) -> f64 {
         .sum()
 }
 
-/// Files written once a run ends: the last VTK, the obstacles, the .pvd
-/// index, per-node contact forces at the last point.
-fn finish_files(rec: &mut Recorder, model: &ShellModel, full: &[f64], lambda: f64) -> Result<()> {
+/// Files written once a run stops: the obstacles and the .pvd index of the
+/// snapshots written; at its end (`finished`; not when interrupted, which
+/// `--resume` continues) also the last VTK and the per-node contact forces
+/// at the last point.
+fn finish_files(
+    rec: &mut Recorder,
+    model: &ShellModel,
+    full: &[f64],
+    lambda: f64,
+    finished: bool,
+) -> Result<()> {
     let Some(d) = rec.dir.clone() else {
         return Ok(());
     };
-    rec.vtk(model, full, lambda, "shell_final.vtu")?;
+    if finished {
+        rec.vtk(model, full, lambda, "shell_final.vtu")?;
+    }
     let scene = rec.scene;
     let size = scene.mesh.size();
     let mut pvd = rec.state.pvd.clone();
+    // shell_final.vtu and the last step's snapshot, when that step's number
+    // is a multiple of output.vtk_every, are one state: indexed once, by the
+    // snapshot of the series (review 7).
+    if let [.., a, b] = pvd.as_slice()
+        && a.0 == b.0
+        && a.1 == b.1
+    {
+        pvd.pop();
+    }
     let times: Vec<f64> = pvd.iter().map(|e| e.0).collect();
     for (k, ob) in model.obstacles.iter().enumerate() {
         let (pts, quads) = match ob {
@@ -1201,6 +1219,9 @@ fn finish_files(rec: &mut Recorder, model: &ShellModel, full: &[f64], lambda: f6
         }
     }
     write_pvd(&d.join("shell.pvd"), &pvd)?;
+    if !finished {
+        return Ok(());
+    }
     let mut rows = vec![];
     for c in super::probe::contacts(model, full, lambda) {
         let x0 = model.x0[c.node];

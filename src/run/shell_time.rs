@@ -630,7 +630,9 @@ fn write_fields(path: &Path, scene: &ShellScene, dae: &FrictionDae, s: &TimeSamp
     let mut rn = vec![0.0; n];
     let mut force = vec![nalgebra::Vector3::zeros(); n];
     let mut slip = vec![nalgebra::Vector3::zeros(); n];
-    let mut stick = vec![0.0; n];
+    // −1: no friction at the node (not a candidate, or held), which 0 would
+    // paint as slipping (review 7).
+    let mut stick = vec![-1.0; n];
     let law = dae.laws.law;
     for f in &s.friction {
         rn[f.node] += f.rn;

@@ -97,3 +97,24 @@ pub fn print_table(title: &str, errs: &[(String, f64)]) {
         println!("  {name:<8} {e:>12.3e}");
     }
 }
+
+/// The (timestep, part) entries of DIR/shell.pvd, asserted distinct (review
+/// 7: shell_final.vtu and the last step's snapshot were both listed at the
+/// same time) and naming files that exist; returns their number.
+pub fn unique_pvd_entries(dir: &std::path::Path) -> usize {
+    let pvd = std::fs::read_to_string(dir.join("shell.pvd")).expect("shell.pvd");
+    let attr = |line: &str, key: &str| -> String {
+        let at = line.find(&format!("{key}=\"")).expect(key) + key.len() + 2;
+        line[at..].split('"').next().unwrap().to_string()
+    };
+    let mut seen = std::collections::BTreeSet::new();
+    for line in pvd.lines().filter(|l| l.contains("<DataSet")) {
+        let key = (attr(line, "timestep"), attr(line, "part"));
+        assert!(
+            seen.insert(key.clone()),
+            "{key:?} listed twice in shell.pvd"
+        );
+        assert!(dir.join(attr(line, "file")).is_file(), "{line}");
+    }
+    seen.len()
+}

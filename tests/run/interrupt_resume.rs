@@ -91,9 +91,11 @@ fn sigterm_stops_at_a_step_end_and_resume_matches_an_uninterrupted_run() {
         "last row {last}, stop {lambda}"
     );
     assert!(
-        !cut.join("shell_final.vtu").exists(),
+        !cut.join("shell_final.vtu").exists() && !cut.join("contact_final.csv").exists(),
         "no final-state file for an interrupted run"
     );
+    // The snapshots written so far are indexed for ParaView (review 7).
+    assert!(crate::common::unique_pvd_entries(&cut) >= 1);
 
     let st = Command::new(env!("CARGO_BIN_EXE_anm"))
         .args(["run", "--quiet", "--resume"])
@@ -102,6 +104,7 @@ fn sigterm_stops_at_a_step_end_and_resume_matches_an_uninterrupted_run() {
         .unwrap();
     assert_eq!(st.code(), Some(0));
     assert_eq!(summary(&cut)["stop"]["reason"], "end");
+    crate::common::unique_pvd_entries(&cut);
     let (a, b) = (
         rows(&full.join("history.csv")),
         rows(&cut.join("history.csv")),
