@@ -118,3 +118,14 @@ pub fn unique_pvd_entries(dir: &std::path::Path) -> usize {
     }
     seen.len()
 }
+
+/// `anm run --quiet SCENE -o OUT` (the binary of the test target).
+pub fn anm_run(scene: &std::path::Path, out: &std::path::Path) -> std::process::Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_anm"))
+        .args(["run", "--quiet"])
+        .arg(scene)
+        .arg("-o")
+        .arg(out)
+        .output()
+        .unwrap()
+}

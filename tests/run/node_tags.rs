@@ -7,7 +7,6 @@
 use crate::scratch::scratch;
 use std::collections::BTreeMap;
 use std::path::Path;
-use std::process::Command;
 
 /// The new tag of old node tag t of plate-cylinder-20x2.msh (63 nodes):
 /// reversed, spread out and offset, so that no tag keeps its number or
@@ -122,13 +121,7 @@ fn scene(mesh: &Path, centre_z: &str) -> String {
 }
 
 fn run(scene: &Path, out: &Path) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_anm"))
-        .args(["run", "--quiet"])
-        .arg(scene)
-        .arg("-o")
-        .arg(out)
-        .output()
-        .unwrap()
+    crate::common::anm_run(scene, out)
 }
 
 /// Rows of a CSV file as strings, header first.

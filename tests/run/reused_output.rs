@@ -6,7 +6,6 @@
 
 use crate::scratch::scratch;
 use std::path::Path;
-use std::process::Command;
 
 /// The moving-plane verification scene with a VTK snapshot every step and
 /// `lambda_end` as given.
@@ -20,13 +19,7 @@ fn scene(lambda_end: f64) -> String {
 }
 
 fn run(scene: &Path, out: &Path) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_anm"))
-        .args(["run", "--quiet"])
-        .arg(scene)
-        .arg("-o")
-        .arg(out)
-        .output()
-        .unwrap()
+    crate::common::anm_run(scene, out)
 }
 
 /// The shell snapshots in `dir` (shell_NNNN.vtu), sorted.

@@ -433,41 +433,36 @@ fn a_merge_refuses_items_of_another_mesh_or_sweep() {
         anm(&args.iter().map(String::as_str).collect::<Vec<_>>())
     };
 
+    let merge = || anm(&["merge", &s("mixed")]);
+    let refused = |out: Output, needles: &[&str]| {
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{err}");
+        for n in needles {
+            assert!(err.contains(n), "`{n}` not in: {err}");
+        }
+    };
+
     // Item 0 on the 0.1 m mesh; the mesh regenerated (0.05 m) before item 1.
     ok("item 0", item("a.toml", "0", "mixed"));
     copy_mesh("plate-cylinder-40x4.msh");
-    let out = item("a.toml", "1", "mixed");
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert!(
-        !out.status.success() && err.contains("a scene or mesh file changed"),
-        "{err}"
+    refused(
+        item("a.toml", "1", "mixed"),
+        &["a scene or mesh file changed"],
     );
-    let out = anm(&["merge", &s("mixed")]);
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert!(
-        !out.status.success()
-            && err.contains("m.msh")
-            && err.contains("changed since the items ran"),
-        "{err}"
-    );
+    refused(merge(), &["m.msh", "changed since the items ran"]);
 
     // Both items of scene a, and item 1 of scene b (order 10) copied over
     // a's item 1: same number, same label, another sweep.
     copy_mesh("plate-cylinder-20x2.msh");
     ok("item 1", item("a.toml", "1", "mixed"));
-    ok("merge", anm(&["merge", &s("mixed")]));
+    ok("merge", merge());
     ok("b item 1", item("b.toml", "1", "other"));
     std::fs::copy(
         dir.join("other/items/1.json"),
         dir.join("mixed/items/1.json"),
     )
     .unwrap();
-    let out = anm(&["merge", &s("mixed")]);
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert!(
-        !out.status.success() && err.contains("ran in another sweep"),
-        "{err}"
-    );
+    refused(merge(), &["ran in another sweep"]);
 
     // A stray item file beyond the sweep's items is named.
     ok("item 1 again", item("a.toml", "1", "mixed"));
@@ -476,7 +471,7 @@ fn a_merge_refuses_items_of_another_mesh_or_sweep() {
         dir.join("mixed/items/7.json"),
     )
     .unwrap();
-    let out = anm(&["merge", &s("mixed")]);
+    let out = merge();
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success() && err.contains("7.json"), "{err}");
 }
