@@ -145,7 +145,7 @@ pub fn write_csv(path: &Path, rows: &[AlongRow]) -> Result<()> {
     let mut w = csv::Writer::from_path(path).map_err(err)?;
     w.write_record(HEADER).map_err(err)?;
     for r in rows {
-        w.write_record(r.values().map(|v| format!("{:.12e}", v + 0.0)))
+        w.write_record(r.values().map(crate::output::csv_number))
             .map_err(err)?;
     }
     w.flush().map_err(|e| Error::write(path, e.to_string()))

@@ -24,9 +24,9 @@ use super::section::{MembraneStress, membrane_stress};
 use super::time_checkpoint::TimeCheckpoint;
 use crate::contact::Motion;
 use crate::error::{Error, Result};
-use crate::output::mode;
 use crate::output::plot::{Curve, Panel, draw};
 use crate::output::vtk::{PointData, write_vtu_cells};
+use crate::output::{csv_number, mode};
 use crate::scene::shell::{ShellScene, TIME_FORCE_COLUMNS, TIME_STABILITY_COLUMNS, Units};
 use crate::series::ContinuationProblem;
 use crate::shell::friction_dae::{FrictionDae, TimeLaws, TimeState};
@@ -324,12 +324,12 @@ fn write_events(
         w.write_record([
             e.tangent.to_string(),
             e.detected_by.to_string(),
-            format!("{:.12e}", e.t),
-            format!("{:.12e}", e.lambda),
-            format!("{:.12e}", e.outputs[0]),
-            format!("{:.12e}", e.outputs[1]),
-            format!("{:.12e}", e.bracket[0]),
-            format!("{:.12e}", e.bracket[1]),
+            csv_number(e.t),
+            csv_number(e.lambda),
+            csv_number(e.outputs[0]),
+            csv_number(e.outputs[1]),
+            csv_number(e.bracket[0]),
+            csv_number(e.bracket[1]),
             e.restarts.to_string(),
             e.negative_pivots[0].to_string(),
             e.negative_pivots[1].to_string(),
@@ -538,8 +538,8 @@ fn report(
         w.write_record(&head)
             .map_err(|e| write_err(&file)(e.to_string()))?;
         for r in &rows {
-            // + 0.0: a negative zero (an empty slip area) prints as 0.
-            w.write_record(r.iter().map(|v| format!("{:.12e}", v + 0.0)))
+            // csv_number writes a negative zero (an empty slip area) as 0.
+            w.write_record(r.iter().map(|&v| csv_number(v)))
                 .map_err(|e| write_err(&file)(e.to_string()))?;
         }
         w.flush().map_err(|e| write_err(&file)(e.to_string()))?;
@@ -573,7 +573,7 @@ fn report(
                     f.gap, f.rn, f.force[0], f.force[1], f.force[2], f.slip[0], f.slip[1],
                     f.slip[2], speed,
                 ]
-                .map(|v| format!("{:.12e}", v + 0.0)),
+                .map(csv_number),
             );
             rec.push(state.into());
             w.write_record(&rec)
