@@ -925,12 +925,18 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
                     fresh_output(&out)?;
                     let run = anm::model::friction_run::run(&sc, Some(&out), !quiet)
                         .map_err(|e| running(e, &scene))?;
+                    // How many steps were implicit, and how many implicit
+                    // tries were rejected (review 8: `implicit` on
+                    // friction-1d took none and 10× the factorizations).
                     println!(
-                        "{}: stop = {} at t = {:.6} s; {} steps, {} factorizations, {} solves, {:.3} s; outputs in {}",
+                        "{}: stop = {} at t = {:.6} s; {} steps ({} implicit, {} implicit tries rejected; time_step = {}), {} factorizations, {} solves, {:.3} s; outputs in {}",
                         scene.display(),
                         run.stop.reason,
                         run.stop.t.unwrap_or(f64::NAN),
                         run.stats.steps,
+                        run.implicit.steps,
+                        run.implicit.rejected,
+                        sc.stepping.name(),
                         run.stats.factorizations,
                         run.stats.solves,
                         run.wall_s,

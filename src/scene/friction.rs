@@ -186,11 +186,20 @@ pub struct FrictionScene {
 
 impl FrictionScene {
     /// The uniform output grid 0, dt, 2 dt, ..., t_end.
+    /// 0, dt, 2 dt, … and t_end itself where dt does not divide it (as the
+    /// shell runs in time; review 8: dt = 0.7 wrote rows at 0 and 0.7 only).
     pub fn output_times(&self) -> Vec<f64> {
-        let n = (self.t_end / self.dt).round() as usize;
-        (0..=n)
+        let n = (self.t_end / self.dt * (1.0 + 1e-12)).floor() as usize;
+        let mut times: Vec<f64> = (0..=n)
             .map(|i| (i as f64 * self.dt).min(self.t_end))
-            .collect()
+            .collect();
+        if times
+            .last()
+            .is_some_and(|&t| t < self.t_end * (1.0 - 1e-12))
+        {
+            times.push(self.t_end);
+        }
+        times
     }
 }
 
@@ -388,11 +397,12 @@ pub fn load(path: &Path, text: &str, kind: Kind) -> Result<FrictionScene> {
             format!("must not exceed solver.t_end = {t_end:?}, got {dt:?}"),
         ));
     }
-    let rows = t_end / dt;
+    // Rows at 0, dt, … and t_end.
+    let rows = (t_end / dt).ceil() + 1.0;
     if rows > 1e6 {
         return Err(c.fail(
             "output.dt",
-            format!("gives {rows:.3e} history rows up to solver.t_end (at most 1e6)"),
+            format!("gives {rows:.0} history rows up to solver.t_end (at most 1e6)"),
         ));
     }
     Ok(FrictionScene {
