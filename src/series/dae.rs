@@ -781,21 +781,30 @@ fn correct_outputs<P: DaeProblem + ?Sized>(
         if norm(&eng.eval0(&y[..nd], &y[nd..], t)) <= cfg.residual_tol {
             continue;
         }
-        let mut vz = y[nd..].to_vec();
-        if eng
-            .newton(&y[..nd], &mut vz, t, cfg.newton_tol, index)
-            .is_err()
-            || solve_series(eng, &y[..nd], &vz, t, index, 1).is_err()
-        {
-            continue;
-        }
-        let count = nd + eng.n();
-        let y: Vec<f64> = (0..count).map(|i| eng.tape.input_series(i)[0]).collect();
-        let dy: Vec<f64> = (0..count).map(|i| eng.tape.input_series(i)[1]).collect();
-        if y.iter().chain(&dy).all(|x| x.is_finite()) {
-            step.points.push((t, y, dy));
+        if let Some(point) = consistent_point(eng, &y[..nd], &y[nd..], t, index, cfg) {
+            step.points.push(point);
         }
     }
+}
+
+/// The point at time t with positions `u`: (v, z) solved consistent with
+/// them by Newton from `vz`, and dy/dt read from their order-1 series, as
+/// (t, y, dy/dt); None where Newton fails or a value is not finite.
+fn consistent_point<P: DaeProblem + ?Sized>(
+    eng: &mut Engine<P>,
+    u: &[f64],
+    vz: &[f64],
+    t: f64,
+    index: usize,
+    cfg: &DaeConfig,
+) -> Option<(f64, Vec<f64>, Vec<f64>)> {
+    let mut vz = vz.to_vec();
+    eng.newton(u, &mut vz, t, cfg.newton_tol, index).ok()?;
+    solve_series(eng, u, &vz, t, index, 1).ok()?;
+    let count = eng.nd + eng.n();
+    let y: Vec<f64> = (0..count).map(|i| eng.tape.input_series(i)[0]).collect();
+    let dy: Vec<f64> = (0..count).map(|i| eng.tape.input_series(i)[1]).collect();
+    (y.iter().chain(&dy).all(|x| x.is_finite())).then_some((t, y, dy))
 }
 
 /// Moves (u, vz) (nd differential unknowns, the others) to the end of

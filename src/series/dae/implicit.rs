@@ -91,8 +91,8 @@
 //! starts the next step and the output times' guesses).
 
 use super::{
-    DaeConfig, DaeProblem, Engine, Stepping, TimeStep, copy_series, explicit_step, series_at,
-    solve_series,
+    DaeConfig, DaeProblem, Engine, Stepping, TimeStep, consistent_point, copy_series,
+    explicit_step, series_at, solve_series,
 };
 // (geometric_distance is reached as super::geometric_distance)
 use crate::error::{Error, Result};
@@ -773,13 +773,7 @@ fn hermite_point<P: DaeProblem + ?Sized>(
     if !(estimate <= cfg.eps * scale) {
         return None;
     }
-    let mut vz = guess[nd..].to_vec();
-    eng.newton(u, &mut vz, t, cfg.newton_tol, index).ok()?;
-    solve_series(eng, u, &vz, t, index, 1).ok()?;
-    let count = nd + eng.n();
-    let y: Vec<f64> = (0..count).map(|i| eng.tape.input_series(i)[0]).collect();
-    let dy: Vec<f64> = (0..count).map(|i| eng.tape.input_series(i)[1]).collect();
-    (y.iter().chain(&dy).all(|x| x.is_finite())).then_some((t, y, dy))
+    consistent_point(eng, u, &guess[nd..], t, index, cfg)
 }
 
 /// Broyden's update of the quasi-Newton matrix after the step `du` that
