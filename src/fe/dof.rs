@@ -86,13 +86,6 @@ impl Dof {
     }
 }
 
-impl fmt::Display for Dof {
-    /// Nodes are shown 1-based, as in the mesh files and the outputs.
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "node {} {}", self.node + 1, self.component)
-    }
-}
-
 /// Index in the full vector of a node's component by its offset (0..6:
 /// ux, uy, uz, wx, wy, wz), for loops over components.
 pub fn index(node: usize, offset: usize) -> usize {
@@ -118,6 +111,6 @@ mod tests {
         for c in Component::ALL {
             assert_eq!(Component::from_name(c.name()), Some(c));
         }
-        assert_eq!(Dof::new(3, Component::Wy).to_string(), "node 4 wy");
+        assert_eq!(Component::Wy.to_string(), "wy");
     }
 }

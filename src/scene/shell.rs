@@ -1443,7 +1443,10 @@ fn fixes(ctx: &Ctx, raw: &[RawFix]) -> Result<BTreeMap<Dof, f64>> {
                 {
                     return Err(c.fail(
                         &key,
-                        format!("{dof} is already fixed with value {old}, here {val}"),
+                        format!(
+                            "node {} {comp} is already fixed with value {old}, here {val}",
+                            ctx.mesh.node_tags[n]
+                        ),
                     ));
                 }
             }
@@ -2077,8 +2080,8 @@ fn probes(
                 return Err(c.fail(
                     &key,
                     format!(
-                        "a reaction needs fixed dofs, but {} is free",
-                        Dof::new(n, comp)
+                        "a reaction needs fixed dofs, but node {} {comp} is free",
+                        ctx.mesh.node_tags[n]
                     ),
                 ));
             }
