@@ -4,6 +4,7 @@
 //! their order of first use, which a renumbered mesh did not match). The
 //! answers do not depend on the numbering.
 
+use crate::common::anm_run as run;
 use crate::scratch::scratch;
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -118,10 +119,6 @@ fn scene(mesh: &Path, centre_z: &str) -> String {
         );
     assert_ne!(edited, text);
     edited
-}
-
-fn run(scene: &Path, out: &Path) -> std::process::Output {
-    crate::common::anm_run(scene, out)
 }
 
 /// Rows of a CSV file as strings, header first.

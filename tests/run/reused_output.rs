@@ -4,6 +4,7 @@
 //! the directory belongs to the last run; other files are kept; a scene
 //! that fails to load leaves the earlier run whole.
 
+use crate::common::anm_run as run;
 use crate::scratch::scratch;
 use std::path::Path;
 
@@ -16,10 +17,6 @@ fn scene(lambda_end: f64) -> String {
     let text = text.replace("vtk_every = 0", "vtk_every = 1");
     assert!(text.contains("vtk_every = 1") && text.contains(&format!("lambda_end = {lambda_end}")));
     text
-}
-
-fn run(scene: &Path, out: &Path) -> std::process::Output {
-    crate::common::anm_run(scene, out)
 }
 
 /// The shell snapshots in `dir` (shell_NNNN.vtu), sorted.
