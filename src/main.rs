@@ -1147,8 +1147,8 @@ fn time_summary(r: &anm::run::shell_time::TimeReport, out: &std::path::Path) -> 
     println!(
         "{}: stop = {} at t = {:.6} s; {} steps ({} implicit, {} of them fully implicit; time_step = {}), {} factorizations, {} corrections, {:.3} s; {} friction nodes; outputs in {}",
         r.scene,
-        r.stop,
-        r.stop_t,
+        r.stop.reason,
+        r.stop.t.unwrap_or(f64::NAN),
         r.steps,
         r.implicit_steps,
         r.newton_steps,
@@ -1159,12 +1159,12 @@ fn time_summary(r: &anm::run::shell_time::TimeReport, out: &std::path::Path) -> 
         r.friction_nodes,
         out.display()
     );
-    match (r.stop_node, r.stop.as_str()) {
+    match (r.stop.node, r.stop.reason.as_str()) {
         (Some(n), "singularity") => println!("  singular point at node {n}"),
         (Some(n), _) => println!("  the trouble is located at node {n}"),
         (None, _) => {}
     }
-    if let Some(m) = &r.stop_message {
+    if let Some(m) = &r.stop.message {
         println!("  {m}");
     }
     for n in &r.notes {
@@ -1193,7 +1193,7 @@ fn time_summary(r: &anm::run::shell_time::TimeReport, out: &std::path::Path) -> 
     }
     // A stop on numerical trouble is a failure (its files hold the run up
     // to there); a detected singularity is a result.
-    match r.stop.as_str() {
+    match r.stop.reason.as_str() {
         "end" | "singularity" => ExitCode::SUCCESS,
         "interrupted" => ExitCode::from(130),
         _ => ExitCode::from(2),

@@ -274,6 +274,7 @@ pub fn run(scene: &FrictionScene, out_dir: Option<&Path>, progress: bool) -> Res
         reason: result.stop.clone(),
         t: Some(result.t),
         lambda: None,
+        node: None,
         message: match (&result.error, result.stop.as_str()) {
             (Some(crate::Error::StepCollapse { length, .. }), _) if result.stats.steps == 0 => {
                 Some(first_step_below_floor(*length, scene.min_step))
@@ -412,6 +413,9 @@ struct Summary<'a> {
     solves: usize,
     wall_s: f64,
     stop: &'a Stop,
+    /// The columns of history.csv at its last row (as in every run's
+    /// summary.json).
+    end: std::collections::BTreeMap<&'a str, f64>,
     #[serde(skip_serializing_if = "Option::is_none")]
     t_singular_estimate: Option<f64>,
     /// (t0, t*) of every step whose series was geometric.
@@ -441,6 +445,12 @@ impl<'a> From<&'a FrictionRun> for Summary<'a> {
             solves: run.stats.solves,
             wall_s: run.wall_s,
             stop: &run.stop,
+            end: run
+                .columns
+                .iter()
+                .map(String::as_str)
+                .zip(run.history.last().into_iter().flatten().map(|x| x + 0.0))
+                .collect(),
             t_singular_estimate: run.t_singular_estimate,
             singular_events: &run.singular_events,
             scene: &run.scene,

@@ -141,6 +141,13 @@ pub fn folder_or_absent(dir: &Path) -> Result<()> {
     }
 }
 
+/// A stop compares with its reason (`report.stop == "end"`).
+impl PartialEq<&str> for Stop {
+    fn eq(&self, reason: &&str) -> bool {
+        self.reason == *reason
+    }
+}
+
 /// Creates the output directory (and parents).
 pub fn create_dir(dir: &Path) -> Result<()> {
     folder_or_absent(dir)?;
@@ -159,6 +166,10 @@ pub struct Stop {
     /// Load parameter of the stop (continuation runs).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub lambda: Option<f64>,
+    /// The node (its mesh tag) of a singular point, or the node that a
+    /// numerical stop's diagnosis names (shell runs in time).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub node: Option<usize>,
     /// Human-readable diagnosis for anything but a normal end.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub message: Option<String>,

@@ -32,6 +32,8 @@ use std::time::Instant;
 #[derive(Clone, Debug, Serialize)]
 pub struct RunReport {
     pub scene: String,
+    /// The scene's kind ("shell"), as every summary.json has it.
+    pub kind: &'static str,
     pub mesh: String,
     pub nodes: usize,
     pub elements: usize,
@@ -178,12 +180,13 @@ pub fn resume(out_dir: &Path, progress: bool) -> Result<RunReport> {
         let text = std::fs::read_to_string(out_dir.join("summary.json")).ok()?;
         let v: serde_json::Value = serde_json::from_str(&text).ok()?;
         let stop = &v["stop"];
-        // A run in time writes `stop` as a string with `stop_t`.
-        // A point-mass friction run writes `stop.t` (review 6: "lambda =
-        // null"); it takes milliseconds and is not resumable.
-        let (reason, at) = match stop.as_str() {
-            Some(reason) => (reason, format!("t = {}", v["stop_t"])),
-            None if stop["t"].is_number() => (
+        // A run in time writes `stop.t` (review 6: "lambda = null"); a
+        // point-mass friction run takes milliseconds and is not resumable.
+        let (reason, at) = match v["kind"].as_str() {
+            Some("shell") if stop["t"].is_number() => {
+                (stop["reason"].as_str()?, format!("t = {}", stop["t"]))
+            }
+            _ if stop["t"].is_number() => (
                 stop["reason"].as_str()?,
                 format!(
                     "t = {}; a {} run is not resumable, run it again",
@@ -191,7 +194,7 @@ pub fn resume(out_dir: &Path, progress: bool) -> Result<RunReport> {
                     v["kind"].as_str().unwrap_or("point-mass friction")
                 ),
             ),
-            None => (
+            _ => (
                 stop["reason"].as_str()?,
                 format!("lambda = {}", stop["lambda"]),
             ),
@@ -878,6 +881,7 @@ fn run_inner(
         reason: stop.reason().to_string(),
         t: None,
         lambda: Some(stop.lambda().unwrap_or(lambda_last)),
+        node: None,
         message,
     };
     let factorizations = stats.factorizations + rec.state.grid_factorizations;
@@ -903,6 +907,7 @@ fn run_inner(
         let _ = std::fs::remove_file(d.join("checkpoint.json"));
     }
     let report = RunReport {
+        kind: "shell",
         scene: scene.file.display().to_string(),
         mesh: scene.mesh.file.display().to_string(),
         nodes: scene.mesh.nodes.len(),

@@ -26,7 +26,7 @@ use crate::contact::Motion;
 use crate::error::{Error, Result};
 use crate::output::plot::{Curve, Panel, draw};
 use crate::output::vtk::{PointData, write_vtu_cells};
-use crate::output::{csv_number, mode};
+use crate::output::{Stop, csv_number, mode};
 use crate::scene::shell::{ShellScene, TIME_FORCE_COLUMNS, TIME_STABILITY_COLUMNS, Units};
 use crate::series::ContinuationProblem;
 use crate::shell::friction_dae::{FrictionDae, TimeLaws, TimeState};
@@ -41,6 +41,10 @@ use std::time::Instant;
 #[derive(Clone, Debug, Serialize)]
 pub struct TimeReport {
     pub scene: String,
+    /// The scene's kind ("shell") and the method ("anm"), as every
+    /// summary.json has them.
+    pub kind: String,
+    pub method: String,
     pub dofs: usize,
     pub friction_nodes: usize,
     /// Contact nodes left without friction (a fixed translation), 1-based.
@@ -58,21 +62,18 @@ pub struct TimeReport {
     pub corrections: usize,
     pub max_residual: f64,
     pub wall_s: f64,
-    /// "end", "singularity", "interrupted", or the kind of the numerical
-    /// trouble that stopped the run (e.g. "time_steps").
-    pub stop: String,
-    pub stop_t: f64,
-    /// 1-based node of a singularity, or the node a numerical stop's
-    /// diagnosis names.
-    pub stop_node: Option<usize>,
-    /// The diagnosis of a run stopped by numerical trouble.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub stop_message: Option<String>,
+    /// `reason`: "end", "singularity", "interrupted", or the kind of the
+    /// numerical trouble that stopped the run (e.g. "time_steps"); `t`;
+    /// `node`: the mesh tag of a singularity's node, or of the node a
+    /// numerical stop's diagnosis names; `message`: that diagnosis. The
+    /// same object as a static run's `stop` (with `t` for `lambda`).
+    pub stop: Stop,
     /// The columns of history.csv at its last row.
     pub end: BTreeMap<String, f64>,
-    /// history.csv's header and rows (not in summary.json).
-    #[serde(skip)]
+    /// history.csv's header (summary.json `columns`, as in every run).
+    #[serde(rename = "columns")]
     pub header: Vec<String>,
+    /// history.csv's rows (not in summary.json).
     #[serde(skip)]
     pub history: Vec<Vec<f64>>,
     /// Critical points between output times (`friction.stability`).
@@ -461,7 +462,7 @@ fn report(
         });
     }
     let last = run.samples.last().expect("the sample at t = 0");
-    let (stop, stop_t, stop_node, stop_message) = match &run.stop {
+    let (reason, stop_t, node, message) = match &run.stop {
         TimeStop::End => ("end", last.t, None, None),
         TimeStop::Singularity { t, node } => ("singularity", *t, Some(*node), None),
         TimeStop::Interrupted { t } => ("interrupted", *t, None, None),
@@ -474,6 +475,8 @@ fn report(
     };
     let mut report = TimeReport {
         scene: scene.file.display().to_string(),
+        kind: "shell".into(),
+        method: "anm".into(),
         dofs: dae.model.ndof(),
         friction_nodes: last.friction.len(),
         nodes_without_friction: run.skipped.iter().map(|&n| dae.model.node_tag(n)).collect(),
@@ -490,10 +493,13 @@ fn report(
         corrections: run.stats.corrections,
         max_residual: run.stats.max_residual,
         wall_s,
-        stop: stop.into(),
-        stop_t,
-        stop_node,
-        stop_message,
+        stop: Stop {
+            reason: reason.into(),
+            t: Some(stop_t),
+            lambda: None,
+            node,
+            message,
+        },
         end: head
             .iter()
             .cloned()

@@ -122,7 +122,7 @@ pub fn run_item(parameter: &str, value: f64, scene: &ShellScene) -> TimeAuditIte
     let outcome = match sweep::catch(|| shell_time::run(scene, None)) {
         Ok(Ok(r)) => Ok(TimeRunRecord {
             history: r.history,
-            stop: r.stop,
+            stop: r.stop.reason,
             steps: r.steps,
             factorizations: r.factorizations,
             max_residual: r.max_residual,

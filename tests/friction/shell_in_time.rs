@@ -139,11 +139,12 @@ fn a_pull_above_what_friction_holds_stops_with_time_and_node() {
     }
     sc.solver.max_steps = 300;
     let r = shell_time::run(&sc, None).expect("a report of the stop");
-    let msg = r.stop_message.clone().unwrap_or_default();
+    let msg = r.stop.message.clone().unwrap_or_default();
     println!("{msg}");
-    assert_eq!(r.stop, "time_steps", "{msg}");
+    assert_eq!(r.stop.reason, "time_steps", "{msg}");
     assert!(msg.starts_with("t = ") && msg.contains("node "), "{msg}");
-    assert!(r.history.iter().all(|row| row[0] <= r.stop_t));
+    let stop_t = r.stop.t.expect("the stop's time");
+    assert!(r.history.iter().all(|row| row[0] <= stop_t));
     // The library's strict solve keeps it an error.
     let e = shell_time::solve(&sc).err().expect("no creep above f N");
     assert_eq!(e.kind(), "time_steps");

@@ -174,9 +174,9 @@ fn sigterm_stops_a_shell_run_in_time_with_its_outputs() {
     );
     assert_eq!(code, Some(130), "exit code of an interrupted run");
     let s = summary(&out);
-    assert_eq!(s["stop"], "interrupted");
-    let t = s["stop_t"].as_f64().unwrap();
-    assert!(t > 0.0 && t < 1.5, "stop_t = {t}");
+    assert_eq!(s["stop"]["reason"], "interrupted");
+    let t = s["stop"]["t"].as_f64().unwrap();
+    assert!(t > 0.0 && t < 1.5, "stop.t = {t}");
     let history = rows(&out.join("history.csv"));
     assert!(!history.is_empty());
     assert!(
@@ -249,8 +249,8 @@ fn sigterm_then_resume_a_shell_run_in_time_matches_an_uninterrupted_run() {
             continue;
         }
         assert_eq!(code, Some(130));
-        assert_eq!(s["stop"], "interrupted");
-        let t = s["stop_t"].as_f64().unwrap();
+        assert_eq!(s["stop"]["reason"], "interrupted");
+        let t = s["stop"]["t"].as_f64().unwrap();
         if t >= 0.04 || wait > 4 * wall {
             break t;
         }
@@ -263,7 +263,7 @@ fn sigterm_then_resume_a_shell_run_in_time_matches_an_uninterrupted_run() {
         .output()
         .unwrap();
     assert_eq!(resumed.status.code(), Some(0), "{resumed:?}");
-    assert_eq!(summary(&cut)["stop"], "end");
+    assert_eq!(summary(&cut)["stop"]["reason"], "end");
     assert!(
         !cut.join("checkpoint.json").exists(),
         "the ended run keeps no checkpoint"

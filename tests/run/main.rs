@@ -13,5 +13,6 @@ mod node_tags;
 mod numerical_stop;
 mod reused_output;
 mod stability;
+mod summary_layout;
 mod sweeps;
 mod units;

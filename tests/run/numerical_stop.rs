@@ -3,9 +3,9 @@
 //! stops where the strip breaks away, t* = T1 exp(f θ) / T2max, because
 //! the quasi-static solution ceases there. `anm run` used to print the
 //! diagnosis and write no file; it now writes every output up to the stop,
-//! summary.json with the error's kind as `stop`, `stop_t`, `stop_message`
-//! and `stop_node` (the node the diagnosis names), and exits with 2 (a
-//! failure, as a static run's numerical stop).
+//! summary.json with `stop: {reason: <the error's kind>, t, node, message}`
+//! (node: the node the diagnosis names), and exits with 2 (a failure, as a
+//! static run's numerical stop).
 
 use crate::scratch::scratch;
 use std::path::Path;
@@ -35,13 +35,13 @@ fn a_run_in_time_stopped_by_numerical_trouble_writes_its_outputs() {
     assert_eq!(run.status.code(), Some(2), "{run:?}");
     let summary: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
-    let stop_t = summary["stop_t"].as_f64().unwrap();
-    let message = summary["stop_message"].as_str().unwrap();
-    assert_eq!(summary["stop"], "time_steps", "{summary}");
+    let stop_t = summary["stop"]["t"].as_f64().unwrap();
+    let message = summary["stop"]["message"].as_str().unwrap();
+    assert_eq!(summary["stop"]["reason"], "time_steps", "{summary}");
     assert!(message.contains("may cease to exist"), "{message}");
     assert!(stdout.contains(message), "the diagnosis is printed");
-    // The node the diagnosis names is summary.json's stop_node (1-based).
-    let node = summary["stop_node"].as_u64().expect("stop_node") as usize;
+    // The node the diagnosis names is summary.json's stop.node (its tag).
+    let node = summary["stop"]["node"].as_u64().expect("stop.node") as usize;
     assert!(
         message.contains(&format!("node {node} ")),
         "{node} in {message}"
