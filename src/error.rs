@@ -28,7 +28,7 @@ pub enum Error {
     },
     #[error("element {element}: {problem}")]
     Element { element: usize, problem: String },
-    #[error("step {step}, {param} = {at:.9e}: singular tangent matrix ({detail})")]
+    #[error("step {step}, {param} = {at:.9e}: the tangent matrix could not be factored ({detail})")]
     SingularMatrix {
         step: usize,
         param: &'static str,

@@ -912,6 +912,18 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
                     for w in &sc.warnings {
                         eprintln!("warning: {w}");
                     }
+                    // Review 9: under mpirun a faer backend ran the whole
+                    // path on every rank without a word.
+                    #[cfg(feature = "mumps")]
+                    if anm::linalg::mpi::ranks() > 1
+                        && sc.solver.linear
+                            != anm::linalg::Choice::Only(anm::linalg::Backend::Mumps)
+                    {
+                        eprintln!(
+                            "warning: {} MPI ranks, but solver.linear_solver is not \"mumps\": every rank solves the whole problem (rank 0 writes the files); only MUMPS shares the factorization among ranks",
+                            anm::linalg::mpi::ranks()
+                        );
+                    }
                     fresh_output(&out)?;
                     let report = anm::run::shell::run_loaded(&sc, Some(&out), !quiet)
                         .map_err(|e| running(e, &scene))?;

@@ -713,3 +713,56 @@ fn anm_run_on_two_ranks_matches_faer() {
             .unwrap();
     assert!(v["stats"]["linear"]["mumps"].as_u64().unwrap() > 0);
 }
+
+/// MUMPS gives the inertia of every symmetric tangent, not only the first:
+/// the Euler column (scenes/verification/euler-column.toml, P_cr =
+/// π²EI/4L² at λ = 1) run with `linear_solver = "mumps"` locates its
+/// bifurcation where faer's LDLᵀ does. Before review 9, the factorizations
+/// after the first were analysed as general (SYM = 0, no inertia): the run
+/// stopped at λ = 0 on "the tangent is not symmetric", and strip-wrinkling
+/// crossed its bifurcation without a word.
+#[test]
+fn mumps_locates_the_euler_column_bifurcation_as_ldlt_does() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let tmp = scratch("mumps-euler");
+    let dir = tmp.path();
+    let text = std::fs::read_to_string(root.join("scenes/verification/euler-column.toml")).unwrap();
+    assert!(text.contains("[solver]"));
+    let event = |solver: &str| -> (f64, serde_json::Value) {
+        let scene = dir.join(format!("{solver}.toml"));
+        std::fs::write(
+            &scene,
+            text.replacen(
+                "[solver]",
+                &format!("[solver]\nlinear_solver = \"{solver}\""),
+                1,
+            ),
+        )
+        .unwrap();
+        let out = dir.join(solver);
+        let o = Command::new(env!("CARGO_BIN_EXE_anm"))
+            .args(["run", "--quiet", "-o"])
+            .arg(&out)
+            .arg(&scene)
+            .stdin(Stdio::null())
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{solver}: {o:?}");
+        let v: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap())
+                .unwrap();
+        let e = &v["events"][0];
+        assert_eq!(e["kind"], "bifurcation", "{solver}: {}", v["events"]);
+        (e["lambda"].as_f64().unwrap(), v["stats"]["linear"].clone())
+    };
+    let (ldlt, _) = event("ldlt");
+    let (mumps, linear) = event("mumps");
+    println!(
+        "Euler column: bifurcation at lambda = {ldlt:.10} (LDLT), {mumps:.10} (MUMPS); {linear}"
+    );
+    assert!((ldlt - 1.0).abs() < 2e-3, "closed form 1: {ldlt}");
+    assert!((mumps - ldlt).abs() <= 1e-9, "{mumps} vs {ldlt}");
+    assert_eq!(linear["lu"], 0);
+    assert!(linear["mumps"].as_u64().unwrap() >= 1, "{linear}");
+    assert!(linear["negative_pivots"].is_number(), "{linear}");
+}

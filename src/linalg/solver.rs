@@ -137,6 +137,10 @@ pub struct SolverStats {
     /// Negative pivots of the last symmetric factorization (the number of
     /// negative eigenvalues of the tangent), `None` after an LU.
     pub negative_pivots: Option<usize>,
+    /// Symmetric matrices factored without inertia (by the LU: named, or
+    /// after the symmetric backends failed), whose critical points the
+    /// inertia cannot show.
+    pub symmetric_without_inertia: usize,
     /// Seconds in symbolic analyses (ordering, supernodes).
     pub analysis_s: f64,
     /// Unknowns of the separator where LDLᵀ is split over two threads.
@@ -170,6 +174,9 @@ impl SolverStats {
         self.fallbacks += fallbacks;
         self.max_backward_error = self.max_backward_error.max(f.backward_error);
         self.negative_pivots = f.inertia.map(|i| i.0);
+        if f.symmetric && f.inertia.is_none() {
+            self.symmetric_without_inertia += 1;
+        }
     }
 }
 
@@ -187,6 +194,8 @@ pub struct LinearSolver {
     lu: Option<Arc<LuSymbolic>>,
     #[cfg(feature = "mumps")]
     mumps: Option<Arc<std::sync::Mutex<mumps_backend::Instance>>>,
+    /// The outcome of the last symmetry check ([`LinearSolver::last_check_symmetric`]).
+    last_check_symmetric: Option<bool>,
     stats: SolverStats,
     /// The backend of the last accepted factorization on this pattern.
     last: Option<Backend>,
@@ -216,6 +225,8 @@ pub struct Factorization {
     backend: Backend,
     backward_error: f64,
     inertia: Option<(usize, usize, usize)>,
+    /// The matrix passed the symmetry check (set with the checks).
+    symmetric: bool,
     /// Seconds of the numeric factorization alone (no analysis, no check).
     numeric_s: f64,
     /// Seconds of the caller's solve beside its test
@@ -239,6 +250,7 @@ impl LinearSolver {
             lu: None,
             #[cfg(feature = "mumps")]
             mumps: None,
+            last_check_symmetric: None,
             stats: SolverStats::default(),
             last: None,
         }
@@ -306,11 +318,15 @@ impl LinearSolver {
         }
         let (guess, checks) = match self.last {
             Some(backend) => {
-                let (f, checks) =
-                    self.numeric_beside(backend, &s, &values, backend.symmetric(), || {
-                        Checks::of(&s, &values)
-                    });
-                (Some((backend, f)), checks)
+                // MUMPS is analysed as symmetric or not: the guess keeps
+                // the last factorization's choice (a guess analysed as
+                // general lost the inertia of every symmetric tangent after
+                // the first: review 9) and is redone below if the checks
+                // disagree.
+                let symmetric = self.last_symmetric(backend);
+                let (f, checks) = self
+                    .numeric_beside(backend, &s, &values, symmetric, || Checks::of(&s, &values));
+                (Some((backend, symmetric, f)), checks)
             }
             None => (None, Checks::of(&s, &values)),
         };
@@ -320,12 +336,15 @@ impl LinearSolver {
         }
         self.stats.matrix_entries = s.nnz();
         let symmetric = checks.symmetric;
+        self.last_check_symmetric = Some(symmetric);
         let candidates: Vec<Backend> = match self.choice {
             Choice::Only(b) => vec![b],
             Choice::Auto if symmetric => Backend::ALL.to_vec(),
             Choice::Auto => vec![Backend::Lu],
         };
-        let mut guess = guess.filter(|(b, _)| Some(b) == candidates.first());
+        let mut guess = guess.filter(|(b, sym, _)| {
+            Some(b) == candidates.first() && (!self.is_mumps(*b) || *sym == symmetric)
+        });
         let mut reasons = vec![];
         for backend in candidates {
             if backend.symmetric() && !symmetric {
@@ -336,7 +355,7 @@ impl LinearSolver {
                 continue;
             }
             let factored = match guess.take() {
-                Some((_, f)) => f,
+                Some((_, _, f)) => f,
                 None => {
                     self.numeric_beside(backend, &s, &values, symmetric, || ())
                         .0
@@ -357,6 +376,7 @@ impl LinearSolver {
                 };
                 f.backward_error = eta;
                 f.caller_solve_s = seconds;
+                f.symmetric = symmetric;
                 (f, x)
             });
             match tested {
@@ -365,8 +385,12 @@ impl LinearSolver {
                     self.last = Some(backend);
                     return Ok((f, b.map(|_| x)));
                 }
+                // Not necessarily singular: LBLᵀ pivots only inside a
+                // supernode and fails on some non-singular saddle-point
+                // matrices (review 9: a KKT matrix with |eigenvalues| ≥
+                // 9.3e-3, which the LU factors).
                 Ok((f, _)) if f.backward_error.is_nan() => reasons.push(format!(
-                    "{}: the solve is not finite (a singular matrix)",
+                    "{}: the solve is not finite (a zero pivot: a singular matrix, or for ldlt and lblt one that pivoting within supernodes cannot avoid)",
                     backend.name()
                 )),
                 Ok((f, _)) => reasons.push(format!(
@@ -380,6 +404,35 @@ impl LinearSolver {
         self.stats.fallbacks += reasons.len();
         self.last = None;
         Err(format!("no factorization passed: {}", reasons.join("; ")))
+    }
+
+    /// Whether the last matrix passed the symmetry check (None before any,
+    /// or when it was refused for a non-finite entry).
+    pub fn last_check_symmetric(&self) -> Option<bool> {
+        self.last_check_symmetric
+    }
+
+    /// The symmetry `backend` factors with when guessed before the checks:
+    /// a faer backend's own; MUMPS's last analysis (general at first).
+    fn last_symmetric(&self, backend: Backend) -> bool {
+        #[cfg(feature = "mumps")]
+        if backend == Backend::Mumps {
+            return self
+                .mumps
+                .as_ref()
+                .is_some_and(|m| m.lock().expect("MUMPS lock").symmetric());
+        }
+        backend.symmetric()
+    }
+
+    /// Whether `backend` is MUMPS (analysed as symmetric or general).
+    fn is_mumps(&self, backend: Backend) -> bool {
+        #[cfg(feature = "mumps")]
+        if backend == Backend::Mumps {
+            return true;
+        }
+        let _ = backend;
+        false
     }
 
     /// The numeric factorization by `backend` (split over two threads where
@@ -459,6 +512,7 @@ impl LinearSolver {
                 backend,
                 backward_error: f64::NAN,
                 inertia: symmetric.then_some((negative, 0, s.n() - negative)),
+                symmetric: false,
                 mumps_memory_mb: Some(memory),
             };
             return Ok(f);
@@ -508,6 +562,7 @@ impl LinearSolver {
             backend,
             backward_error: f64::NAN,
             inertia,
+            symmetric: false,
             mumps_memory_mb: None,
         }
     }

@@ -473,7 +473,13 @@ fn run_inner(
                 let mut switch: Option<Event> = None;
                 if secondary.is_some() && rec.state.switched_at.is_none() {
                     let n1 = match step.negative_pivots {
-                        Some(_) => end_inertia(model, &mut event_lu, &step.u_end, step.lambda_end)?,
+                        Some(_) => end_inertia(
+                            model,
+                            &mut event_lu,
+                            &step.u_end,
+                            step.lambda_end,
+                            step.index,
+                        )?,
                         None => None,
                     };
                     events = critical_points(model, &mut event_lu, &step, n1, None, &locate)?;
@@ -544,7 +550,13 @@ fn run_inner(
                     // Found above.
                 } else if path_at_end(&step, &cfg) {
                     let n1 = match step.negative_pivots {
-                        Some(_) => end_inertia(model, &mut event_lu, &step.u_end, step.lambda_end)?,
+                        Some(_) => end_inertia(
+                            model,
+                            &mut event_lu,
+                            &step.u_end,
+                            step.lambda_end,
+                            step.index,
+                        )?,
                         None => None,
                     };
                     events.extend(critical_points(
@@ -621,7 +633,7 @@ fn run_inner(
                 let (u, l) = (u.to_vec(), l);
                 let model: &mut ShellModel = path.problem();
                 let n1 = match prev.negative_pivots {
-                    Some(_) => end_inertia(model, &mut event_lu, &u, l)?,
+                    Some(_) => end_inertia(model, &mut event_lu, &u, l, prev.index)?,
                     None => None,
                 };
                 for e in critical_points(model, &mut event_lu, &prev, n1, None, &locate)? {
@@ -940,6 +952,14 @@ fn run_inner(
             if matches!(scene.branch, Branch::Secondary { .. }) && rec.state.switched_at.is_none() {
                 notes.push("solver.branch = \"secondary\", but the path crossed no bifurcation: it is the primary path".into());
             }
+            // Review 9: with the LU, the Euler column crossed its
+            // bifurcation without a word.
+            let blind = stats.linear.symmetric_without_inertia;
+            if blind > 0 {
+                notes.push(format!(
+                    "{blind} symmetric tangents were factored by the LU, which gives no inertia (solver.linear_solver = \"lu\", or the symmetric backends failed their check): a bifurcation or limit point on those steps is not seen by a change of negative pivots, only by the geometric-series test; linear_solver = \"auto\" factors them by LDLT"
+                ));
+            }
             notes
         },
         contact_switches: rec.state.contact.switches,
@@ -1043,23 +1063,30 @@ fn path_at_end(step: &PathStep, cfg: &crate::series::ContinuationConfig) -> bool
 }
 
 /// Negative pivots of the tangent at (u, lambda) (None when it is not
-/// symmetric): the inertia at the end of the last step (called only when
+/// symmetric): the inertia at the end of step `step` (called only when
 /// the step's start tangent had an inertia: one more factorization per
 /// run, or per step with solver.branch = "secondary" before the switch).
+/// A tangent that lost its symmetry on the step (a follower load) has no
+/// inertia, also for a backend that needs symmetry (review 9: `ldlt` threw
+/// away a finished path there, or hid the error that stopped it).
 fn end_inertia(
     model: &mut ShellModel,
     lu: &mut LinearSolver,
     u: &[f64],
     lambda: f64,
+    step: usize,
 ) -> Result<Option<usize>> {
     let (k, _) = model.tangent(u, lambda)?;
-    let f = lu.factorize(&k).map_err(|detail| Error::SingularMatrix {
-        step: 0,
-        param: "lambda",
-        at: lambda,
-        detail: format!("tangent at the path's end: {detail}"),
-    })?;
-    Ok(f.inertia().map(|i| i.0))
+    match lu.factorize(&k) {
+        Ok(f) => Ok(f.inertia().map(|i| i.0)),
+        Err(_) if lu.last_check_symmetric() == Some(false) => Ok(None),
+        Err(detail) => Err(Error::SingularMatrix {
+            step,
+            param: "lambda",
+            at: lambda,
+            detail: format!("tangent at the end of step {step}: {detail}"),
+        }),
+    }
 }
 
 /// The critical points that `step` crosses, given the negative pivots `n1`

@@ -766,15 +766,21 @@ pub fn load(path: &Path) -> Result<ShellScene> {
     };
     let loaded = !loads.is_empty() || fixed.values().any(|v| *v != 0.0);
     let friction = match &raw.friction {
-        Some(fr) => Some(friction(
-            &c,
-            fr,
-            raw.solver.time_step.as_deref(),
-            &obstacles,
-            contact.is_some(),
-            loaded,
-            &raw.load,
-        )?),
+        Some(fr) => Some(
+            friction(
+                &c,
+                fr,
+                raw.solver.time_step.as_deref(),
+                &obstacles,
+                contact.is_some(),
+                loaded,
+                &raw.load,
+            )
+            .and_then(|f| {
+                stability_needs_inertia(&c, &f, raw.solver.linear_solver.as_deref())?;
+                Ok(f)
+            })?,
+        ),
         None => {
             if let Some(i) = raw.load.iter().position(|l| l.ramp.is_some()) {
                 return Err(c.fail(
@@ -1860,6 +1866,23 @@ fn friction(
     })
 }
 
+/// `friction.stability` counts the tied tangent's negative pivots, which an
+/// LU does not give (review 9: every row read −1 and the event went
+/// unreported while the lowest eigenvalue changed sign).
+fn stability_needs_inertia(
+    c: &Checker,
+    fr: &FrictionSpec,
+    linear_solver: Option<&str>,
+) -> Result<()> {
+    if fr.stability && linear_solver == Some("lu") {
+        return Err(c.fail(
+            "friction.stability",
+            "counts the tangent's negative pivots, and solver.linear_solver = \"lu\" gives none: use \"auto\", \"ldlt\" or \"lblt\"",
+        ));
+    }
+    Ok(())
+}
+
 /// Obstacle motions that only friction would feel, in a scene without it:
 /// a rotation (only the surface moves) or a translation along the obstacle's
 /// own surface (no gap changes).
@@ -2180,6 +2203,15 @@ fn branch(c: &Checker, s: &RawSolver, method: &Method) -> Result<Branch> {
         return Err(c.fail(
             "solver.branch",
             "\"secondary\" needs solver.method = \"anm\"",
+        ));
+    }
+    // The bifurcation is found by the tangent's inertia, which an LU has
+    // not (review 9: the run followed the straight Euler column and said
+    // the path crossed no bifurcation).
+    if secondary && s.linear_solver.as_deref() == Some("lu") {
+        return Err(c.fail(
+            "solver.branch",
+            "\"secondary\" needs the tangent's inertia to find the bifurcation, and solver.linear_solver = \"lu\" gives none: use \"auto\", \"ldlt\" or \"lblt\"",
         ));
     }
     match (secondary, s.branch_direction) {

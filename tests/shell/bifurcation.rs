@@ -621,3 +621,43 @@ fn newton_runs_note_a_jump_and_a_turning_back() {
         assert!(r.notes.iter().any(|n| n.contains(needle)), "{:?}", r.notes);
     }
 }
+
+/// The LU gives no inertia (review 9): on the Euler column (bifurcation at
+/// λ = 1.000967 with LDLᵀ, closed form 1) `linear_solver = "lu"` sees no
+/// event, and the run now says why in its notes; a secondary branch and the
+/// stability monitor in time, which need the inertia, refuse it up front.
+#[test]
+fn the_lu_backend_names_the_critical_points_it_cannot_see() {
+    let root = format!("{}/scenes/verification", env!("CARGO_MANIFEST_DIR"));
+    let with_lu = |name: &str| {
+        let text = std::fs::read_to_string(format!("{root}/{name}.toml")).unwrap();
+        assert!(text.contains("[solver]"));
+        let file = crate::scratch::ScratchFile::with_text(
+            "lu-inertia",
+            &format!("{name}.toml"),
+            &text
+                .replace("../../meshes/", &format!("{root}/../../meshes/"))
+                .replacen("[solver]", "[solver]\nlinear_solver = \"lu\"", 1),
+        );
+        (load(&file), file)
+    };
+    let (sc, _file) = with_lu("euler-column");
+    let r = run_loaded(&sc.unwrap(), None, false).unwrap();
+    let ldlt = run_loaded(&scene("euler-column"), None, false).unwrap();
+    assert_eq!(ldlt.events.len(), 1, "{:?}", ldlt.events);
+    assert!(r.events.is_empty(), "{:?}", r.events);
+    assert!(r.stats.linear.symmetric_without_inertia >= 1);
+    assert!(
+        r.notes.iter().any(|n| n.contains("no inertia")),
+        "{:?}",
+        r.notes
+    );
+    for (name, key) in [
+        ("euler-column-secondary", "solver.branch"),
+        ("euler-column-in-time", "friction.stability"),
+    ] {
+        let (sc, _file) = with_lu(name);
+        let e = sc.expect_err(name).to_string();
+        assert!(e.contains(key) && e.contains("inertia"), "{name}: {e}");
+    }
+}
