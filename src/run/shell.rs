@@ -472,16 +472,7 @@ fn run_inner(
                 let mut events = vec![];
                 let mut switch: Option<Event> = None;
                 if secondary.is_some() && rec.state.switched_at.is_none() {
-                    let n1 = match step.negative_pivots {
-                        Some(_) => end_inertia(
-                            model,
-                            &mut event_lu,
-                            &step.u_end,
-                            step.lambda_end,
-                            step.index,
-                        )?,
-                        None => None,
-                    };
+                    let n1 = step_end_inertia(model, &mut event_lu, &step)?;
                     events = critical_points(model, &mut event_lu, &step, n1, None, &locate)?;
                     switch = events
                         .iter()
@@ -549,16 +540,7 @@ fn run_inner(
                 if secondary.is_some() && rec.state.switched_at.is_none() {
                     // Found above.
                 } else if path_at_end(&step, &cfg) {
-                    let n1 = match step.negative_pivots {
-                        Some(_) => end_inertia(
-                            model,
-                            &mut event_lu,
-                            &step.u_end,
-                            step.lambda_end,
-                            step.index,
-                        )?,
-                        None => None,
-                    };
+                    let n1 = step_end_inertia(model, &mut event_lu, &step)?;
                     events.extend(critical_points(
                         model,
                         &mut event_lu,
@@ -1060,6 +1042,19 @@ fn path_at_end(step: &PathStep, cfg: &crate::series::ContinuationConfig) -> bool
         -1.0
     };
     (step.lambda_end - cfg.lambda_end) * forward >= -1e-14 * cfg.lambda_end.abs().max(1.0)
+}
+
+/// [`end_inertia`] at the end of `step`, when its start tangent had an
+/// inertia (None otherwise).
+fn step_end_inertia(
+    model: &mut ShellModel,
+    lu: &mut LinearSolver,
+    step: &PathStep,
+) -> Result<Option<usize>> {
+    match step.negative_pivots {
+        Some(_) => end_inertia(model, lu, &step.u_end, step.lambda_end, step.index),
+        None => Ok(None),
+    }
 }
 
 /// Negative pivots of the tangent at (u, lambda) (None when it is not
