@@ -238,11 +238,98 @@ pub fn path(
             }
         }
     }
-    Ok(StripPath {
+    let path = StripPath {
         pieces,
         wraps,
         arcs,
-    })
+    };
+    if let Some((a, b, at)) = path.self_crossing() {
+        // Names of the straight pieces: line k runs from circle k to k + 1.
+        let line = |k: usize| format!("from {} to {}", circles[k].2, circles[k + 1].2);
+        let what = match b {
+            Crossed::Line(b) => format!("the straight strip {}", line(b)),
+            Crossed::Arc(m) => format!("the strip's wrap of {}", circles[m + 1].2),
+        };
+        return Err(format!(
+            "the strip's path crosses itself: the straight strip {} meets {what} at (y, z) = ({:.4}, {:.4}); a roller wrapped the wrong way round does this: check `turn`",
+            line(a),
+            at.x,
+            at.y
+        ));
+    }
+    Ok(path)
+}
+
+/// What a straight piece of the path crosses ([`StripPath::self_crossing`]):
+/// another straight piece (by its index among the lines) or a roller's wrap
+/// (by the roller's index).
+enum Crossed {
+    Line(usize),
+    Arc(usize),
+}
+
+impl StripPath {
+    /// The first crossing of a straight piece with a later straight piece
+    /// or with a wrap it does not join (review 10: `turn = ["cw", "cw",
+    /// "cw"]` for an S-line made two spans cross, and the run solved that
+    /// impossible line with exit 0): the indices of the line and of what it
+    /// meets, and the point. Arcs are tested as chords of 1/2 degree.
+    fn self_crossing(&self) -> Option<(usize, Crossed, V2)> {
+        let lines: Vec<(usize, V2, V2)> = self
+            .pieces
+            .iter()
+            .enumerate()
+            .filter_map(|(i, p)| match *p {
+                Piece::Line { from, to } => Some((i, from, to)),
+                Piece::Arc { .. } => None,
+            })
+            .collect();
+        for (a, &(ia, p, q)) in lines.iter().enumerate() {
+            for (b, &(_, r, s)) in lines.iter().enumerate().skip(a + 1) {
+                if let Some(x) = segments_cross(p, q, r, s) {
+                    return Some((a, Crossed::Line(b), x));
+                }
+            }
+            for (m, &ic) in self.arcs.iter().enumerate() {
+                // The wraps that this line leaves or reaches share its ends.
+                if ic + 1 == ia || ia + 1 == ic {
+                    continue;
+                }
+                let chords = ((self.pieces[ic].length() / self.radius_of(ic)).to_degrees() * 2.0)
+                    .ceil()
+                    .max(1.0) as usize;
+                for k in 0..chords {
+                    let (c0, _) = self.pieces[ic].at(k as f64 / chords as f64);
+                    let (c1, _) = self.pieces[ic].at((k + 1) as f64 / chords as f64);
+                    if let Some(x) = segments_cross(p, q, c0, c1) {
+                        return Some((a, Crossed::Arc(m), x));
+                    }
+                }
+            }
+        }
+        None
+    }
+
+    fn radius_of(&self, piece: usize) -> f64 {
+        match self.pieces[piece] {
+            Piece::Arc { r, .. } => r,
+            Piece::Line { .. } => f64::INFINITY,
+        }
+    }
+}
+
+/// The point where the segments [p, q] and [r, s] cross (touching ends
+/// included), if they do.
+fn segments_cross(p: V2, q: V2, r: V2, s: V2) -> Option<V2> {
+    let cross = |a: V2, b: V2| a.x * b.y - a.y * b.x;
+    let (d1, d2) = (q - p, s - r);
+    let den = cross(d1, d2);
+    if den == 0.0 {
+        return None;
+    }
+    let t = cross(r - p, d2) / den;
+    let u = cross(r - p, d1) / den;
+    ((0.0..=1.0).contains(&t) && (0.0..=1.0).contains(&u)).then(|| p + d1 * t)
 }
 
 /// The strip mesh of `path`: width [x0, x1] in `across` elements, pieces
@@ -385,6 +472,24 @@ mod tests {
         let c = roller("c", [1.0, 0.1], Turn::Clockwise);
         let e = path([-1.0, 0.0], [1.0, 2.0], &[a, b, c], 0.0).unwrap_err();
         assert!(e.contains("passes through roller `c`"), "{e}");
+        // An S-line over three rollers (review 10) with the middle roller's
+        // turn reversed: the spans into and out of it cross at (0.8096,
+        // −0.2553) by the reviewer's own geometry.
+        let line = |middle: Turn| {
+            let mut r2 = roller("r2", [0.8, -0.5], middle);
+            r2.radius = 0.15;
+            let mut r1 = roller("r1", [0.0, 0.0], Turn::Clockwise);
+            r1.radius = 0.2;
+            let mut r3 = roller("r3", [1.6, 0.0], Turn::Clockwise);
+            r3.radius = 0.2;
+            path([-1.0, 0.0], [2.6, 0.0], &[r1, r2, r3], 0.0)
+        };
+        assert!(line(Turn::Counterclockwise).is_ok());
+        let e = line(Turn::Clockwise).unwrap_err();
+        assert!(
+            e.contains("crosses itself") && e.contains("roller `r2`") && e.contains("`turn`"),
+            "{e}"
+        );
     }
 
     /// The mesh's rows follow the path: every arc node at r from the
