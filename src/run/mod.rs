@@ -6,7 +6,9 @@
 //!   checkpoint that `anm run --resume` continues from;
 //! - [`shell`]: the run loop (ANM stepper, Newton baseline, linear solve);
 //! - [`shell_time`]: a shell scene with `[friction]`, integrated in time;
-//! - [`memory`]: a mesh too large for the machine refused before the run.
+//! - [`memory`]: a mesh too large for the machine refused before the run;
+//! - [`penetration`]: nodes outside the contact group that end inside an
+//!   obstacle, named in the run's notes.
 //!
 //! A run stops at the next step end after Ctrl-C or SIGTERM
 //! ([`interrupt`]), with every file consistent with the last step.
@@ -15,6 +17,7 @@ pub mod along_strip;
 pub mod build;
 pub mod interrupt;
 pub mod memory;
+pub mod penetration;
 pub mod probe;
 pub mod recorder;
 pub mod section;

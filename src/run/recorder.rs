@@ -155,6 +155,10 @@ pub struct RecorderState {
     /// ([`ContactSides`]).
     #[serde(default)]
     pub contact: ContactSides,
+    /// The deepest node outside the contact group inside an obstacle at a
+    /// step end so far (run::penetration).
+    #[serde(default)]
+    pub penetration: Option<crate::run::penetration::Inside>,
 }
 
 /// Which side of its law's switch each contact pair is on, with

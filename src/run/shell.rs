@@ -16,6 +16,7 @@ use crate::linalg::LinearSolver;
 use crate::output::plot::{Curve, Panel, draw};
 use crate::output::vtk::{cylinder_surface, revolved_surface, write_pvd, write_vtu};
 use crate::output::{Stop, write_csv_ids, write_json};
+use crate::run::penetration;
 use crate::scene::shell::{Branch, Method, ShellScene, load};
 use crate::series::bifurcation::{self, Event};
 use crate::series::correct::Metric;
@@ -557,6 +558,14 @@ fn run_inner(
                     .map(|e| record_event(&mut rec, model, e))
                     .collect::<Result<_>>()?;
                 let g = model.events(&step.u_end, step.lambda_end)?;
+                if !scene.obstacles.is_empty() {
+                    let full = model.expand(&step.u_end, step.lambda_end);
+                    let obstacles = model.obstacles_at(step.lambda_end);
+                    rec.state.penetration = penetration::deeper(
+                        rec.state.penetration,
+                        penetration::inside(model, &obstacles, &full, step.lambda_end),
+                    );
+                }
                 let contact_switches = rec.state.contact.update(&g);
                 rec.step(&StepRow {
                     step: step.index + 1,
@@ -936,6 +945,16 @@ fn run_inner(
             }
             // Review 9: with the LU, the Euler column crossed its
             // bifurcation without a word.
+            let names: Vec<String> = scene.obstacles.iter().map(|o| o.name.clone()).collect();
+            let last = penetration::inside(
+                &model,
+                &model.obstacles_at(lambda_last),
+                &full_last,
+                lambda_last,
+            );
+            if let Some(p) = penetration::deeper(rec.state.penetration, last) {
+                notes.push(penetration::note(&model, &p, &names, "lambda"));
+            }
             let blind = stats.linear.symmetric_without_inertia;
             if blind > 0 {
                 notes.push(format!(

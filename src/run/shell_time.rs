@@ -516,6 +516,14 @@ fn report(
         events,
         notes: vec![],
     };
+    let names: Vec<String> = scene.obstacles.iter().map(|o| o.name.clone()).collect();
+    if let Some(p) =
+        super::penetration::inside(&dae.model, &dae.model.obstacles_at(0.0), &last.full, last.t)
+    {
+        report
+            .notes
+            .push(super::penetration::note(&dae.model, &p, &names, "t"));
+    }
     if let Some(law) = scene.friction.as_ref().map(|f| f.law) {
         let speeds: Vec<f64> = last
             .friction

@@ -8,5 +8,6 @@ mod scratch;
 mod shell_common;
 
 mod event_spring;
+mod outside_the_group;
 mod plate_cylinder;
 mod propped_cantilever;

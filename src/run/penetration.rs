@@ -1,0 +1,83 @@
+//! Nodes inside an obstacle they do not feel.
+//!
+//! Only the nodes of `contact.group` carry contact terms; the others pass
+//! through the obstacles. A strip pulled over rollers with a contact group
+//! on part of it was pulled straight through the other rollers, 1.23 m
+//! along, with exit 0 and no word after the run (review 10). The run now
+//! checks every step end (and a run in time its last state) and says so in
+//! its notes.
+
+use crate::contact::obstacle::Obstacle;
+use crate::shell::ShellModel;
+
+/// The deepest penetration of a state: how many nodes were inside, and
+/// the deepest one (depth, node index, obstacle index).
+#[derive(Clone, Copy, Debug, serde::Serialize, serde::Deserialize)]
+pub struct Inside {
+    pub nodes: usize,
+    pub depth: f64,
+    pub node: usize,
+    pub obstacle: usize,
+    /// The path parameter (lambda or t) of that state.
+    pub at: f64,
+}
+
+/// Nodes outside the contact candidates inside `obstacles` (where their
+/// motion has taken them) in the state `full` (full dof vector) at `at`.
+/// Depths below 1e-9 of the model's length scale are round-off.
+pub fn inside(model: &ShellModel, obstacles: &[Obstacle], full: &[f64], at: f64) -> Option<Inside> {
+    let mut candidate = vec![false; model.x0.len()];
+    for p in &model.pairs {
+        candidate[p.node] = true;
+    }
+    let floor = 1e-9 * model.length_scale;
+    let mut found: Option<Inside> = None;
+    let mut nodes = 0;
+    for (node, x0) in model.x0.iter().enumerate() {
+        if candidate[node] {
+            continue;
+        }
+        let i = crate::fe::dof::index(node, 0);
+        let x = x0 + nalgebra::Vector3::new(full[i], full[i + 1], full[i + 2]);
+        let deepest = obstacles
+            .iter()
+            .enumerate()
+            .filter_map(|(k, o)| o.distance(&x).map(|d| (-d, k)))
+            .filter(|(depth, _)| *depth > floor)
+            .max_by(|a, b| a.0.total_cmp(&b.0));
+        if let Some((depth, obstacle)) = deepest {
+            nodes += 1;
+            if found.is_none_or(|f| depth > f.depth) {
+                found = Some(Inside {
+                    nodes: 0,
+                    depth,
+                    node,
+                    obstacle,
+                    at,
+                });
+            }
+        }
+    }
+    found.map(|f| Inside { nodes, ..f })
+}
+
+/// The deeper of two penetrations.
+pub fn deeper(a: Option<Inside>, b: Option<Inside>) -> Option<Inside> {
+    match (a, b) {
+        (Some(a), Some(b)) => Some(if b.depth > a.depth { b } else { a }),
+        (a, b) => a.or(b),
+    }
+}
+
+/// The note of the run: `param` names the path parameter ("lambda", "t");
+/// `names` are the obstacles' names.
+pub fn note(model: &ShellModel, inside: &Inside, names: &[String], param: &str) -> String {
+    format!(
+        "{} nodes outside contact.group were inside an obstacle (the deepest: node {} at {:.3e} inside `{}`, at {param} = {}): only the contact group's nodes feel the obstacles, the others pass through them; add those nodes to contact.group",
+        inside.nodes,
+        model.node_tag(inside.node),
+        inside.depth,
+        names[inside.obstacle],
+        inside.at
+    )
+}
