@@ -159,6 +159,10 @@ pub struct RecorderState {
     /// step end so far (run::penetration).
     #[serde(default)]
     pub penetration: Option<crate::run::penetration::Inside>,
+    /// The furthest lambda toward lambda_end of a step end so far, times
+    /// lambda_end's sign (a path that turned back, run::shell).
+    #[serde(default)]
+    pub reach: f64,
 }
 
 /// Which side of its law's switch each contact pair is on, with

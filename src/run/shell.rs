@@ -558,6 +558,10 @@ fn run_inner(
                     .map(|e| record_event(&mut rec, model, e))
                     .collect::<Result<_>>()?;
                 let g = model.events(&step.u_end, step.lambda_end)?;
+                rec.state.reach = rec
+                    .state
+                    .reach
+                    .max(step.lambda_end * cfg.lambda_end.signum());
                 if !scene.obstacles.is_empty() {
                     let full = model.expand(&step.u_end, step.lambda_end);
                     let obstacles = model.obstacles_at(step.lambda_end);
@@ -954,6 +958,17 @@ fn run_inner(
             );
             if let Some(p) = penetration::deeper(rec.state.penetration, last) {
                 notes.push(penetration::note(&model, &p, &names, "lambda"));
+            }
+            // Review 10: a strip starting clear of its rollers turned back
+            // at a limit point and went down to lambda = -54 until
+            // max_steps, with no word.
+            let (low, high) = (lambda_last * cfg.lambda_end.signum(), rec.state.reach);
+            if !matches!(stop, PathStop::End { .. }) && low < 0.0 && high > 0.0 {
+                notes.push(format!(
+                    "the path turned back: it reached lambda = {}, then went back past its start to lambda = {} where it stopped: on this path the load is carried up to the first only (a limit point, see events; after a snap-through the path may come back), or the shell is not held where it starts (e.g. a strip clear of its rollers)",
+                    high * cfg.lambda_end.signum(),
+                    low * cfg.lambda_end.signum()
+                ));
             }
             let blind = stats.linear.symmetric_without_inertia;
             if blind > 0 {
