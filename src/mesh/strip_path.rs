@@ -370,7 +370,7 @@ pub fn mesh(
         (Vec3::new(xi, p.x, p.y), Vec3::new(0.0, normal.x, normal.y))
     });
     m.notes.push(format!(
-        "strip path {:.6} m long; wrap angles: {}",
+        "strip path {:.6} long (in the scene's length unit); wrap angles: {}",
         path.length(),
         names
             .iter()

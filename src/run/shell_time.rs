@@ -31,7 +31,7 @@ use crate::scene::shell::{ShellScene, TIME_FORCE_COLUMNS, TIME_STABILITY_COLUMNS
 use crate::series::ContinuationProblem;
 use crate::shell::friction_dae::{FrictionDae, TimeLaws, TimeState};
 use crate::shell::stability::{self, TimeEvent};
-use crate::shell::time_path::{self, TimeConfig, TimeRun, TimeSample, TimeStop};
+use crate::shell::time_path::{self, NodeFriction, TimeConfig, TimeRun, TimeSample, TimeStop};
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -525,6 +525,30 @@ fn report(
             .push(super::penetration::note(&dae.model, &p, &names, "t"));
     }
     if let Some(law) = scene.friction.as_ref().map(|f| f.law) {
+        // Review 10: an idler roller (its surface at the strip's speed)
+        // kept the friction the load ramp had put on it; the exit tension
+        // then moved with the tension and with omega (10 % off the
+        // Coulomb answer at omega = 1e-3), and friction.csv only said
+        // `stick`.
+        let held: Vec<&NodeFriction> = last
+            .friction
+            .iter()
+            .filter(|f| friction_state(&law, f.slip.norm()).0 == "stick")
+            .filter(|f| f.force.norm() > 0.01 * law.f * f.rn.abs())
+            .collect();
+        if let Some(most) = held
+            .iter()
+            .max_by(|a, b| a.force.norm().total_cmp(&b.force.norm()))
+        {
+            report.notes.push(format!(
+                "{} of {} friction nodes stick at t = {stop_t} while carrying friction (up to {:.3e} at node {}, {:.2} of f R_N there): a sticking contact keeps the friction the load history put on it and sheds it only by the regularized creep, so these forces, and the tensions they hold, depend on friction.load_ramp and on friction.omega (docs/shell-friction.md); a roller that should pass the tension unchanged (an idler) needs its surface speed to differ from the strip's, or an omega and t_end that let the creep finish",
+                held.len(),
+                last.friction.len(),
+                most.force.norm(),
+                dae.model.node_tag(most.node),
+                most.force.norm() / (law.f * most.rn.abs()).max(f64::MIN_POSITIVE)
+            ));
+        }
         let speeds: Vec<f64> = last
             .friction
             .iter()

@@ -9,6 +9,7 @@ mod scratch;
 
 mod diffsol_reference;
 mod friction_1d_closed_form;
+mod idler;
 mod plane_closed_form;
 mod reference_cli;
 mod roller_breakdown;
