@@ -405,7 +405,7 @@ impl Sweep for ShellAudit {
     }
 }
 
-const HEADER: [&str; 22] = [
+const HEADER: [&str; 24] = [
     "parameter",
     "value",
     "stop",
@@ -416,8 +416,10 @@ const HEADER: [&str; 22] = [
     "contact_deviation",
     "trajectory_deviation",
     "contact_fx",
+    "contact_fy",
     "contact_fz",
     "clamp_fx",
+    "clamp_fy",
     "clamp_fz",
     "balance",
     "max_residual",
@@ -457,12 +459,12 @@ pub fn markdown(scene: &ShellScene, rows: &[ShellAuditRow]) -> String {
         scene.file.display(),
     );
     s += &format!(
-        "| parameter | value | stop | lambda | {key}({end}) | deviation | {contact}({end}) (N) | deviation | trajectory deviation | contact Fx, Fz (N) | support Fx, Fz (N) | abs(P + C + S)/abs(P) | max abs(R)/abs(R_lambda) | far nodes | steps | factorizations | wall (s) | reference |\n"
+        "| parameter | value | stop | lambda | {key}({end}) | deviation | {contact}({end}) (N) | deviation | trajectory deviation | contact Fx, Fy, Fz (N) | support Fx, Fy, Fz (N) | abs(P + C + S)/abs(P) | max abs(R)/abs(R_lambda) | far nodes | steps | factorizations | wall (s) | reference |\n"
     );
     s += "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
     for r in rows {
         s += &format!(
-            "| {} | {:.0e} | {} | {:.4} | {:.6} | {:.2e} | {:.4} | {:.2e} | {:.2e} | {:.3}, {:.3} | {:.3}, {:.3} | {:.1e} | {:.1e} | {} | {} | {} | {:.1} | {} |\n",
+            "| {} | {:.0e} | {} | {:.4} | {:.6} | {:.2e} | {:.4} | {:.2e} | {:.2e} | {:.3}, {:.3}, {:.3} | {:.3}, {:.3}, {:.3} | {:.1e} | {:.1e} | {} | {} | {} | {:.1} | {} |\n",
             if r.parameter == "penalty" { "K" } else { "eta" },
             r.value,
             r.stop,
@@ -473,8 +475,10 @@ pub fn markdown(scene: &ShellScene, rows: &[ShellAuditRow]) -> String {
             r.contact_deviation,
             r.trajectory_deviation,
             opt(r.check.contact_force.map(|f| f[0])),
+            opt(r.check.contact_force.map(|f| f[1])),
             opt(r.check.contact_force.map(|f| f[2])),
             opt(r.check.clamp_force.map(|f| f[0])),
+            opt(r.check.clamp_force.map(|f| f[1])),
             opt(r.check.clamp_force.map(|f| f[2])),
             opt(r.check.balance),
             r.check.max_residual,
@@ -522,8 +526,10 @@ pub fn write(scene: &ShellScene, rows: &[ShellAuditRow], dir: &Path) -> Result<(
             format!("{:e}", r.contact_deviation),
             format!("{:e}", r.trajectory_deviation),
             format!("{:e}", opt(r.check.contact_force.map(|f| f[0]))),
+            format!("{:e}", opt(r.check.contact_force.map(|f| f[1]))),
             format!("{:e}", opt(r.check.contact_force.map(|f| f[2]))),
             format!("{:e}", opt(r.check.clamp_force.map(|f| f[0]))),
+            format!("{:e}", opt(r.check.clamp_force.map(|f| f[1]))),
             format!("{:e}", opt(r.check.clamp_force.map(|f| f[2]))),
             format!("{:e}", opt(r.check.balance)),
             format!("{:e}", r.check.max_residual),
