@@ -110,9 +110,19 @@ pub fn build_model(scene: &ShellScene) -> Result<ShellModel> {
                 file: scene.file.clone(),
                 key: format!("obstacle[{ob}]"),
                 problem: format!(
-                    "contact node {} at {:?} has initial gap {h0:e}: eq. (3) needs delta = h0 > 0 (the node starts on or inside the obstacle)",
+                    "contact node {} at {:?} has initial gap {h0:e}: eq. (3) needs delta = h0 > 0 (the node starts on or inside the obstacle){}",
                     scene.mesh.node_tags[node],
-                    scene.mesh.nodes[node].as_slice()
+                    scene.mesh.nodes[node].as_slice(),
+                    // Review 10: an off-centre crown gave this message
+                    // with no word of the crown.
+                    match scene.obstacles[ob].shape {
+                        crate::contact::obstacle::Obstacle::Cylinder { crown, .. }
+                            if crown > 0.0 =>
+                        {
+                            "; a crowned roll is highest at its centre's section, and a strip path runs at the radius of the strip's middle section: centre the crown on the strip (obstacle.centre) or raise mesh.offset above the crown's rise there"
+                        }
+                        _ => "",
+                    }
                 ),
             })?;
         m.set_motions(scene.obstacles.iter().map(|o| o.motion).collect());
