@@ -68,3 +68,42 @@ fn a_run_in_time_stopped_by_numerical_trouble_writes_its_outputs() {
         assert!(out.join(file).exists(), "{file}");
     }
 }
+
+/// A static path that turns back and goes below its start says so (review
+/// 10: a strip starting 0.1 m clear of its rollers reached λ = 2.85e-3,
+/// then went down to λ = −54 until max_steps, with no word): the note's
+/// two lambdas are steps.csv's furthest step end and summary.json's stop.
+#[test]
+fn a_path_that_turns_back_below_its_start_says_so() {
+    let scene =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/strip-clear-of-rollers.toml");
+    let dir = scratch("turned-back");
+    let out = dir.path().join("out");
+    let run = crate::common::anm_run(&scene, &out);
+    assert_eq!(run.status.code(), Some(2), "{run:?}");
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["stop"]["reason"], "max_steps", "{summary}");
+    let stop = summary["stop"]["lambda"].as_f64().unwrap();
+    let note = summary["notes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter_map(|n| n.as_str())
+        .find(|n| n.contains("turned back"))
+        .unwrap_or_else(|| panic!("no note: {}", summary["notes"]));
+    println!("{note}");
+    let mut steps = csv::Reader::from_path(out.join("steps.csv")).unwrap();
+    let head: Vec<String> = steps.headers().unwrap().iter().map(String::from).collect();
+    let k = head.iter().position(|h| h == "lambda_end").unwrap();
+    let reach = steps
+        .records()
+        .map(|r| r.unwrap()[k].parse::<f64>().unwrap())
+        .fold(f64::MIN, f64::max);
+    assert!(reach > 0.0 && stop < 0.0, "reach {reach}, stop {stop}");
+    assert!(
+        note.contains(&format!("reached lambda = {reach}")),
+        "{note}"
+    );
+    assert!(note.contains(&format!("to lambda = {stop}")), "{note}");
+}
