@@ -8,6 +8,7 @@
 //! its notes.
 
 use crate::contact::obstacle::Obstacle;
+use crate::scene::shell::ObstacleSpec;
 use crate::shell::ShellModel;
 
 /// The deepest penetration of a state: how many nodes were inside, and
@@ -70,14 +71,19 @@ pub fn deeper(a: Option<Inside>, b: Option<Inside>) -> Option<Inside> {
 }
 
 /// The note of the run: `param` names the path parameter ("lambda", "t");
-/// `names` are the obstacles' names.
-pub fn note(model: &ShellModel, inside: &Inside, names: &[String], param: &str) -> String {
+/// `obstacles` are the scene's (for their names).
+pub fn note(
+    model: &ShellModel,
+    inside: &Inside,
+    obstacles: &[ObstacleSpec],
+    param: &str,
+) -> String {
     format!(
         "{} nodes outside contact.group were inside an obstacle (the deepest: node {} at {:.3e} inside `{}`, at {param} = {}): only the contact group's nodes feel the obstacles, the others pass through them; add those nodes to contact.group",
         inside.nodes,
         model.node_tag(inside.node),
         inside.depth,
-        names[inside.obstacle],
+        obstacles[inside.obstacle].name,
         inside.at
     )
 }

@@ -947,9 +947,6 @@ fn run_inner(
             if matches!(scene.branch, Branch::Secondary { .. }) && rec.state.switched_at.is_none() {
                 notes.push("solver.branch = \"secondary\", but the path crossed no bifurcation: it is the primary path".into());
             }
-            // Review 9: with the LU, the Euler column crossed its
-            // bifurcation without a word.
-            let names: Vec<String> = scene.obstacles.iter().map(|o| o.name.clone()).collect();
             let last = penetration::inside(
                 &model,
                 &model.obstacles_at(lambda_last),
@@ -957,25 +954,16 @@ fn run_inner(
                 lambda_last,
             );
             if let Some(p) = penetration::deeper(rec.state.penetration, last) {
-                notes.push(penetration::note(&model, &p, &names, "lambda"));
+                notes.push(penetration::note(&model, &p, &scene.obstacles, "lambda"));
             }
-            // Review 10: a strip starting clear of its rollers turned back
-            // at a limit point and went down to lambda = -54 until
-            // max_steps, with no word.
-            let (low, high) = (lambda_last * cfg.lambda_end.signum(), rec.state.reach);
-            if !matches!(stop, PathStop::End { .. }) && low < 0.0 && high > 0.0 {
-                notes.push(format!(
-                    "the path turned back: it reached lambda = {}, then went back past its start to lambda = {} where it stopped: on this path the load is carried up to the first only (a limit point, see events; after a snap-through the path may come back), or the shell is not held where it starts (e.g. a strip clear of its rollers)",
-                    high * cfg.lambda_end.signum(),
-                    low * cfg.lambda_end.signum()
-                ));
-            }
-            let blind = stats.linear.symmetric_without_inertia;
-            if blind > 0 {
-                notes.push(format!(
-                    "{blind} symmetric tangents were factored by the LU, which gives no inertia (solver.linear_solver = \"lu\", or the symmetric backends failed their check): a bifurcation or limit point on those steps is not seen by a change of negative pivots, only by the geometric-series test; linear_solver = \"auto\" factors them by LDLT"
-                ));
-            }
+            let ended = matches!(stop, PathStop::End { .. });
+            notes.extend(turned_back(
+                ended,
+                lambda_last,
+                rec.state.reach,
+                cfg.lambda_end,
+            ));
+            notes.extend(without_inertia(stats.linear.symmetric_without_inertia));
             notes
         },
         contact_switches: rec.state.contact.switches,
@@ -1066,6 +1054,27 @@ fn secondary_start(
         &mut stats,
     )?;
     Ok((end.u, end.lambda, phi))
+}
+
+/// A path stopped (not ended) below its start after reaching `reach`
+/// (times lambda_end's sign) says it turned back (review 10: a strip
+/// starting clear of its rollers turned back at a limit point and went down
+/// to lambda = -54 until max_steps, with no word).
+fn turned_back(ended: bool, lambda_last: f64, reach: f64, lambda_end: f64) -> Option<String> {
+    let low = lambda_last * lambda_end.signum();
+    (!ended && low < 0.0 && reach > 0.0).then(|| format!(
+        "the path turned back: it reached lambda = {}, then went back past its start to lambda = {lambda_last} where it stopped: on this path the load is carried up to the first only (a limit point, see events; after a snap-through the path may come back), or the shell is not held where it starts (e.g. a strip clear of its rollers)",
+        reach * lambda_end.signum()
+    ))
+}
+
+/// The note for `blind` symmetric tangents factored without inertia
+/// (review 9: with the LU, the Euler column crossed its bifurcation without
+/// a word).
+fn without_inertia(blind: usize) -> Option<String> {
+    (blind > 0).then(|| format!(
+        "{blind} symmetric tangents were factored by the LU, which gives no inertia (solver.linear_solver = \"lu\", or the symmetric backends failed their check): a bifurcation or limit point on those steps is not seen by a change of negative pivots, only by the geometric-series test; linear_solver = \"auto\" factors them by LDLT"
+    ))
 }
 
 /// Whether the step reached the path's target (it is the last one).

@@ -43,8 +43,8 @@ pub struct TimeReport {
     pub scene: String,
     /// The scene's kind ("shell") and the method ("anm"), as every
     /// summary.json has them.
-    pub kind: String,
-    pub method: String,
+    pub kind: &'static str,
+    pub method: &'static str,
     pub dofs: usize,
     pub friction_nodes: usize,
     /// Contact nodes left without friction (a fixed translation), 1-based.
@@ -475,8 +475,8 @@ fn report(
     };
     let mut report = TimeReport {
         scene: scene.file.display().to_string(),
-        kind: "shell".into(),
-        method: "anm".into(),
+        kind: "shell",
+        method: "anm",
         dofs: dae.model.ndof(),
         friction_nodes: last.friction.len(),
         nodes_without_friction: run.skipped.iter().map(|&n| dae.model.node_tag(n)).collect(),
@@ -516,13 +516,15 @@ fn report(
         events,
         notes: vec![],
     };
-    let names: Vec<String> = scene.obstacles.iter().map(|o| o.name.clone()).collect();
     if let Some(p) =
         super::penetration::inside(&dae.model, &dae.model.obstacles_at(0.0), &last.full, last.t)
     {
-        report
-            .notes
-            .push(super::penetration::note(&dae.model, &p, &names, "t"));
+        report.notes.push(super::penetration::note(
+            &dae.model,
+            &p,
+            &scene.obstacles,
+            "t",
+        ));
     }
     if let Some(law) = scene.friction.as_ref().map(|f| f.law) {
         // Review 10: an idler roller (its surface at the strip's speed)
