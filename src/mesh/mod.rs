@@ -364,7 +364,13 @@ impl Mesh {
             let n = (x[2] - x[0]).cross(&(x[3] - x[1]));
             let scale = (x[2] - x[0]).norm() * (x[3] - x[1]).norm();
             if !(n.norm() > 1e-10 * scale) || scale == 0.0 {
-                return Err(self.element_error(e, "degenerate element (zero area)".into()));
+                // Zero for a collapsed element and for a bow-tie, whose two
+                // halves cancel (review 11: a swapped node pair was called
+                // "zero area").
+                return Err(self.element_error(
+                    e,
+                    "degenerate or self-crossing element: its diagonals are parallel (zero signed area); check its node order".into(),
+                ));
             }
             let nh = n.normalize();
             for i in 0..4 {

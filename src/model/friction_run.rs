@@ -99,6 +99,13 @@ fn start_in_omega(
     }
 }
 
+/// Speeds above this multiple of the scene's speed scale
+/// ([`FrictionScene::speed_scale`]) are a jump, not a quasi-static motion
+/// (`DaeConfig::speed_limit`). Measured: quasi-static runs stay below 3
+/// times the scale; friction-roller's jumps past its breakdown reach
+/// 110–15,965 times it (review 12).
+pub const JUMP: f64 = 30.0;
+
 /// The run's start: its initial values (Newton from the guess, through
 /// omega stages where needed, or the exact ones, checked), a note on how
 /// they were found, and the series' settings.
@@ -137,6 +144,7 @@ fn start(
         stop_at_singularity: scene.stop_at_singularity,
         stepping: scene.stepping,
         output_times: scene.output_times(),
+        speed_limit: JUMP * scene.speed_scale(),
     };
     if let Initialization::Exact { .. } = &init {
         // "exact" values are checked before anything is written: a wrong
@@ -280,8 +288,20 @@ pub fn run(scene: &FrictionScene, out_dir: Option<&Path>, progress: bool) -> Res
                 Some(first_step_below_floor(*length, scene.min_step))
             }
             (Some(e), _) => Some(e.to_string()),
-            (None, "singularity") => Some(match result.t_singular {
-                Some(ts) => format!(
+            (None, "singularity") => Some(match (result.jump, result.t_singular) {
+                (Some((at, speed)), None) => format!(
+                    "the path leaves the quasi-static regime after t = {:.9} s: a speed of {speed:.3e} m/s at t = {at:.9} s, {:.0} times the scene's speed scale {:.3e} m/s (the largest of Vc, the obstacle's speed and the load rate over k), is the regularized dynamics jumping across the end of the quasi-static solution",
+                    result.t,
+                    speed / scene.speed_scale(),
+                    scene.speed_scale(),
+                ),
+                (Some((at, speed)), Some(ts)) => format!(
+                    "at t = {:.9} s the series became geometric (Cochelin-Medale test): a singular point at t* = {ts:.9} s ends the smooth quasi-static solution (followed on without output, the path jumps: {speed:.3e} m/s at t = {at:.9} s, {:.0} times the scene's speed scale {:.3e} m/s)",
+                    result.t,
+                    speed / scene.speed_scale(),
+                    scene.speed_scale(),
+                ),
+                (None, Some(ts)) => format!(
                     "at t = {:.9} s the series became geometric (Cochelin-Medale test): a singular point at t* = {ts:.9} s ends the smooth quasi-static solution{}",
                     result.t,
                     match result.collapse_ahead {
@@ -292,7 +312,7 @@ pub fn run(scene: &FrictionScene, out_dir: Option<&Path>, progress: bool) -> Res
                         None => String::new(),
                     }
                 ),
-                None => format!(
+                (None, None) => format!(
                     "the series step length fell below solver.min_step = {:.3e} s at t = {:.9} s: the solution stops being smooth there",
                     scene.min_step, result.t
                 ),
@@ -415,7 +435,7 @@ struct Summary<'a> {
     stop: &'a Stop,
     /// The columns of history.csv at its last row (as in every run's
     /// summary.json).
-    end: std::collections::BTreeMap<&'a str, f64>,
+    end: indexmap::IndexMap<&'a str, f64>,
     #[serde(skip_serializing_if = "Option::is_none")]
     t_singular_estimate: Option<f64>,
     /// (t0, t*) of every step whose series was geometric.

@@ -24,8 +24,8 @@ use crate::series::path::{Checkpoint, Path as AnmPath};
 use crate::series::stop::Stop as PathStop;
 use crate::series::{ContinuationProblem, PathStep, Stats, correct};
 use crate::shell::ShellModel;
+use indexmap::IndexMap;
 use serde::{Deserialize, Serialize};
-use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -60,7 +60,7 @@ pub struct RunReport {
     pub step_cost: StepCost,
     pub stop: Stop,
     /// Probe values at the last history row.
-    pub end: BTreeMap<String, f64>,
+    pub end: IndexMap<String, f64>,
     /// Largest sum, over all steps, of the bounds on the contact forces of the
     /// candidates left out of the active set (DESIGN §3), N.
     pub skipped_pull_bound: f64,
@@ -892,7 +892,7 @@ fn run_inner(
         message,
     };
     let factorizations = stats.factorizations + rec.state.grid_factorizations;
-    let end: BTreeMap<String, f64> = rec
+    let end: IndexMap<String, f64> = rec
         .state
         .history
         .last()

@@ -32,8 +32,8 @@ use crate::series::ContinuationProblem;
 use crate::shell::friction_dae::{FrictionDae, TimeLaws, TimeState};
 use crate::shell::stability::{self, TimeEvent};
 use crate::shell::time_path::{self, NodeFriction, TimeConfig, TimeRun, TimeSample, TimeStop};
+use indexmap::IndexMap;
 use serde::Serialize;
-use std::collections::BTreeMap;
 use std::path::Path;
 use std::time::Instant;
 
@@ -69,7 +69,7 @@ pub struct TimeReport {
     /// same object as a static run's `stop` (with `t` for `lambda`).
     pub stop: Stop,
     /// The columns of history.csv at its last row.
-    pub end: BTreeMap<String, f64>,
+    pub end: IndexMap<String, f64>,
     /// history.csv's header (summary.json `columns`, as in every run).
     #[serde(rename = "columns")]
     pub header: Vec<String>,

@@ -185,6 +185,21 @@ pub struct FrictionScene {
 }
 
 impl FrictionScene {
+    /// The speed of the scene's quasi-static motions: the largest of Vc,
+    /// the plane's speed, the roller's surface speed and the load rate over
+    /// the spring's stiffness (m/s). A mass moving far faster is jumping
+    /// ([`crate::model::friction_run::JUMP`]).
+    pub fn speed_scale(&self) -> f64 {
+        let obstacle = match self.obstacle {
+            Obstacle::Plane { v } => v.abs(),
+            Obstacle::Roller { r, omega } => (r * omega).abs(),
+        };
+        self.friction
+            .vc
+            .max(obstacle)
+            .max(self.load_rate.abs() / self.k)
+    }
+
     /// The uniform output grid 0, dt, 2 dt, ..., t_end.
     /// 0, dt, 2 dt, … and t_end itself where dt does not divide it (as the
     /// shell runs in time; review 8: dt = 0.7 wrote rows at 0 and 0.7 only).

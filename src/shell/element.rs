@@ -165,6 +165,47 @@ fn to_vec(m: &Matrix3<f64>) -> [f64; 6] {
     ]
 }
 
+/// Area ratio below which a face of the shell is taken as folded: 1/2 is a
+/// cylinder of radius t (the ratio 1 − t/2R on its inner face); shell
+/// kinematics (θ3² terms dropped) need t far below the radii anyway.
+const FOLDED_FACE: f64 = 0.5;
+
+/// Why a shell of thickness `t` cannot exist at a point with reference
+/// vectors `v` (A1, A2, A3, A3,1, A3,2), or `None`: a face θ3 = ±t/2 whose
+/// area element (A1 + θ3 A3,1) × (A2 + θ3 A3,2) · A3 falls below
+/// [`FOLDED_FACE`] of the mid-surface's, i.e. t of the order of a radius of
+/// curvature or above (review 11: a "40 mm" thickness in a scene in m, on a
+/// hemisphere of radius 10, was solved with exit 0).
+fn folded_face(v: &PointVectors, t: f64) -> Option<String> {
+    let area = |theta: f64| {
+        (v[0] + theta * v[3])
+            .cross(&(v[1] + theta * v[4]))
+            .dot(&v[2])
+    };
+    // The area is quadratic in θ3, a0 + a1 θ3 + a2 θ3²: its least value
+    // across the thickness is at a face or at the vertex (on a sphere both
+    // directions fold at θ3 = R, where the faces alone look unfolded).
+    let h = 0.5 * t;
+    let (mid, up, down) = (area(0.0), area(h), area(-h));
+    let (a1, a2) = (
+        (up - down) / (2.0 * h),
+        (up + down - 2.0 * mid) / (2.0 * h * h),
+    );
+    let mut least = up.min(down);
+    if a2 > 0.0 && (a1 / (2.0 * a2)).abs() < h {
+        least = least.min(mid - a1 * a1 / (4.0 * a2));
+    }
+    let ratio = least / mid;
+    // The radius of curvature the directors' rate gives, for the message.
+    let rate = (v[3].norm() / v[0].norm()).max(v[4].norm() / v[1].norm());
+    (!(ratio > FOLDED_FACE)).then(|| {
+        format!(
+            "shell.thickness {t:e} is not small against the radius of curvature {:.3e} here: a face of the shell would fold (area ratio {ratio:.3} of the mid-surface's); a length in another unit?",
+            1.0 / rate
+        )
+    })
+}
+
 /// The zero map every element holds before its own is set (one shared
 /// allocation).
 fn placeholder_map() -> Arc<GeometricMap> {
@@ -231,6 +272,12 @@ impl ShellElement {
                         n.norm(),
                         n.dot(&gb[2])
                     ),
+                });
+            }
+            if let Some(problem) = folded_face(&ref_vec[gi], thickness) {
+                return Err(Error::Element {
+                    element: id,
+                    problem: format!("at Gauss point ({xi:.3}, {eta:.3}): {problem}"),
                 });
             }
             let d = material.d_natural(&gb).ok_or_else(|| Error::Element {

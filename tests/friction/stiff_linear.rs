@@ -74,6 +74,7 @@ fn run_against<P: DaeProblem>(
         stop_at_singularity: false,
         stepping,
         output_times: (0..=300).map(|i| 0.01 * i as f64).collect(),
+        speed_limit: f64::INFINITY,
     };
     let mut steps = Vec::new();
     let r = dae::run(

@@ -59,6 +59,17 @@ fn every_kind_of_run_writes_the_same_summary_core() {
         assert_eq!(columns, head, "{scene}: columns = history.csv's header");
         let end = s["end"].as_object().unwrap();
         assert_eq!(end.len(), head.len(), "{scene}: {end:?}");
+        // In history.csv's order too (review 11: the probes came out
+        // sorted by name, so `columns` zipped with `end`'s values paired
+        // the wrong ones).
+        #[derive(serde::Deserialize)]
+        struct Ordered {
+            end: indexmap::IndexMap<String, f64>,
+        }
+        let text = std::fs::read_to_string(out.join("summary.json")).unwrap();
+        let ordered: Ordered = serde_json::from_str(&text).unwrap();
+        let keys: Vec<&str> = ordered.end.keys().map(String::as_str).collect();
+        assert_eq!(keys, head, "{scene}: end's keys in history.csv's order");
         for (name, value) in head.iter().zip(&last) {
             // The same double in both files (17 significant digits in
             // history.csv, the shortest round trip in summary.json), read

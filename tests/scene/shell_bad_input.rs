@@ -99,7 +99,17 @@ fn self_crossing_element_is_reported() {
         vec![n[0].into(), n[2].into(), n[1].into(), n[3].into()]
     });
     let s = scene("bowtie.toml", &m, &[]);
-    expect_err(load(&s), &["bowtie.msh", &format!(":{line}:")]);
+    // Named as what it is (review 11: "zero area" sent users looking for
+    // a collapsed element).
+    expect_err(
+        load(&s),
+        &[
+            "bowtie.msh",
+            &format!(":{line}:"),
+            "self-crossing",
+            "node order",
+        ],
+    );
 }
 
 #[test]
@@ -112,6 +122,34 @@ fn zero_and_negative_thickness_are_rejected() {
         );
         let e = expect_err(load(&s), &[name, "shell.thickness", "must be > 0"]);
         assert_eq!(e.kind(), "invalid_input");
+    }
+}
+
+#[test]
+fn a_thickness_of_the_order_of_a_radius_is_refused() {
+    // Review 11: a "40 mm" thickness written into a scene in m, on the
+    // hemisphere of radius 10, was solved with exit 0. Its faces would fold
+    // (the inner one through the centre); t = R/2 is still a (thick) shell.
+    let hemisphere =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/verification/hemisphere.toml");
+    let text = std::fs::read_to_string(&hemisphere).unwrap();
+    assert!(
+        text.contains("thickness = 0.04"),
+        "the scene's thickness line"
+    );
+    for (t, refused) in [("40.0", true), ("10.0", true), ("5.0", false)] {
+        let p = tmp(&format!("thick-{t}.toml"));
+        std::fs::write(
+            &p,
+            text.replace("thickness = 0.04", &format!("thickness = {t}")),
+        )
+        .unwrap();
+        let r = load(&p).and_then(|s| anm::run::build::build_model(&s).map(|_| ()));
+        if refused {
+            expect_err(r, &["shell.thickness", "radius of curvature", "fold"]);
+        } else {
+            r.unwrap();
+        }
     }
 }
 
