@@ -125,6 +125,30 @@ pub fn build_model(scene: &ShellScene) -> Result<ShellModel> {
                     }
                 ),
             })?;
+        // As the point-mass scenes (scene::friction): eq. (3) has a real
+        // root at every gap only while eta < K delta. Review 12: eta = 1e12
+        // on plate-cylinder-coarse ran into a bare "no convergence" at
+        // lambda = 1e-11 after 1,151 factorizations.
+        if let Some(p) = m
+            .pairs
+            .iter()
+            .filter(|p| p.law.eta > 0.0)
+            .min_by(|a, b| a.law.delta.total_cmp(&b.law.delta))
+            .filter(|p| p.law.eta >= p.law.k * p.law.delta)
+        {
+            return Err(Error::Invalid {
+                file: scene.file.clone(),
+                key: "contact.eta".into(),
+                problem: format!(
+                    "{:e} must be below K delta for eq. (3) to have a real root at every gap: contact node {} starts at the gap delta = {:e} from obstacle[{}], so K delta = {:e}",
+                    p.law.eta,
+                    scene.mesh.node_tags[p.node],
+                    p.law.delta,
+                    p.obstacle,
+                    p.law.k * p.law.delta
+                ),
+            });
+        }
         m.set_motions(scene.obstacles.iter().map(|o| o.motion).collect());
         if scene.friction.is_some() {
             m.keep_nearest_pairs();

@@ -20,6 +20,7 @@ pub mod memory;
 pub mod penetration;
 pub mod probe;
 pub mod recorder;
+pub mod regularization;
 pub mod section;
 pub mod shell;
 pub mod shell_time;

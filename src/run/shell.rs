@@ -16,7 +16,7 @@ use crate::linalg::LinearSolver;
 use crate::output::plot::{Curve, Panel, draw};
 use crate::output::vtk::{cylinder_surface, revolved_surface, write_pvd, write_vtu};
 use crate::output::{Stop, write_csv_ids, write_json};
-use crate::run::penetration;
+use crate::run::{penetration, regularization};
 use crate::scene::shell::{Branch, Method, ShellScene, load};
 use crate::series::bifurcation::{self, Event};
 use crate::series::correct::Metric;
@@ -964,6 +964,14 @@ fn run_inner(
                 cfg.lambda_end,
             ));
             notes.extend(without_inertia(stats.linear.symmetric_without_inertia));
+            notes.extend(regularization::pull_note(&model, lambda_last));
+            notes.extend(regularization::sink_note(
+                &model,
+                &model.obstacles_at(lambda_last),
+                &scene.obstacles,
+                &full_last,
+                lambda_last,
+            ));
             notes
         },
         contact_switches: rec.state.contact.switches,

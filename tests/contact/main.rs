@@ -11,3 +11,4 @@ mod event_spring;
 mod outside_the_group;
 mod plate_cylinder;
 mod propped_cantilever;
+mod regularization_notes;

@@ -1,0 +1,85 @@
+//! Contact regularizations that carry the answer are named in the run's
+//! notes (review 12: eta = 1e3 N on plate-cylinder-coarse gave a 67 N
+//! reaction for a 30 N load with exit 0 and no word; a soft K let the strip
+//! sink into the cylinder without a word), and eta >= K delta is refused
+//! by name as in the point-mass scenes.
+
+use anm::run::run_loaded;
+use anm::scene::shell::load;
+
+fn coarse(edits: &[(&str, &str)]) -> crate::scratch::ScratchFile {
+    let path =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/plate-cylinder-coarse.toml");
+    let mut text = std::fs::read_to_string(&path).unwrap().replace(
+        "../meshes/",
+        &format!("{}/meshes/", env!("CARGO_MANIFEST_DIR")),
+    );
+    for (old, new) in edits {
+        assert!(text.contains(old), "`{old}` is not in the scene");
+        text = text.replacen(old, new, 1);
+    }
+    crate::scratch::ScratchFile::with_text("regularization-notes", "scene.toml", &text)
+}
+
+#[test]
+fn regularizations_that_carry_the_answer_are_noted() {
+    // The canonical values carry neither note.
+    let r = run_loaded(&load(&coarse(&[])).unwrap(), None, false).unwrap();
+    assert!(
+        !r.notes.iter().any(|n| n.contains("contact.")),
+        "{:?}",
+        r.notes
+    );
+    // 63 candidates x 1e3 N of possible pull against 3 x 10 N of load.
+    let r = run_loaded(
+        &load(&coarse(&[("eta = 1e-6", "eta = 1e3")])).unwrap(),
+        None,
+        false,
+    )
+    .unwrap();
+    let note = r
+        .notes
+        .iter()
+        .find(|n| n.contains("contact.eta"))
+        .unwrap_or_else(|| panic!("no eta note: {:?}", r.notes));
+    println!("{note}");
+    assert!(
+        note.contains("63 candidates") && note.contains("6.300e4"),
+        "{note}"
+    );
+    // K = 10 N/m: the end's reactions (~1 N per node) sink nodes by ~0.1 m.
+    let r = run_loaded(
+        &load(&coarse(&[("k = 1e9", "k = 10.0")])).unwrap(),
+        None,
+        false,
+    )
+    .unwrap();
+    let note = r
+        .notes
+        .iter()
+        .find(|n| n.contains("contact.k"))
+        .unwrap_or_else(|| panic!("no K note: {:?}", r.notes));
+    println!("{note}");
+    let depth: f64 = note
+        .split(" ends ")
+        .nth(1)
+        .and_then(|s| s.split(' ').next())
+        .and_then(|s| s.parse().ok())
+        .unwrap_or_else(|| panic!("no depth in `{note}`"));
+    // Above the 1% of the 2 m strip that triggers the note, below the tip's
+    // whole deflection.
+    assert!(depth > 0.02 && depth < r.end["uz_A"], "{depth}");
+}
+
+#[test]
+fn an_eta_beyond_k_delta_is_refused_by_name() {
+    let e = load(&coarse(&[("eta = 1e-6", "eta = 1e12")]))
+        .and_then(|s| anm::run::build::build_model(&s).map(|_| ()))
+        .unwrap_err()
+        .to_string();
+    println!("{e}");
+    assert!(
+        e.contains("contact.eta") && e.contains("below K delta") && e.contains("node 16"),
+        "{e}"
+    );
+}
