@@ -382,10 +382,7 @@ fn progress_bar(show: bool, t_end: f64) -> Option<indicatif::ProgressBar> {
     if !show {
         return None;
     }
-    let bar = indicatif::ProgressBar::new(1000);
-    let style = indicatif::ProgressStyle::with_template("{bar:40} {percent:>3}% {msg}")
-        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar());
-    bar.set_style(style);
+    let bar = crate::output::progress_bar();
     bar.set_message(format!("t = 0 / {t_end} s"));
     Some(bar)
 }

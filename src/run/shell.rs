@@ -245,14 +245,7 @@ pub fn run_loaded(scene: &ShellScene, out_dir: Option<&Path>, progress: bool) ->
 }
 
 fn progress_bar(progress: bool) -> Option<indicatif::ProgressBar> {
-    progress.then(|| {
-        let b = indicatif::ProgressBar::new(1000);
-        b.set_style(
-            indicatif::ProgressStyle::with_template("{bar:40} {percent:>3}% {msg}")
-                .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
-        );
-        b
-    })
+    progress.then(crate::output::progress_bar)
 }
 
 /// The state of an accepted step at lambda = g: on the series where it

@@ -163,14 +163,7 @@ enum Keep {
 fn solve_with(scene: &ShellScene, progress: bool, keep: Keep) -> Result<(TimeRun, FrictionDae)> {
     let mut dae = problem(scene)?;
     let cfg = config(scene);
-    let bar = progress.then(|| {
-        let b = indicatif::ProgressBar::new(1000);
-        b.set_style(
-            indicatif::ProgressStyle::with_template("{bar:40} {percent:>3}% {msg}")
-                .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
-        );
-        b
-    });
+    let bar = progress.then(crate::output::progress_bar);
     let t_end = cfg.t_end;
     let mut show = |t: f64, steps: usize| {
         if let Some(b) = &bar {

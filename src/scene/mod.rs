@@ -265,8 +265,15 @@ impl Checker<'_> {
     pub fn slip_speeds(&self, vc: f64, omega: f64, q: f64) -> Result<()> {
         let w2 = (omega * vc).powi(2);
         if !w2.is_finite() || (omega > 0.0 && w2 == 0.0) {
+            // The key of the factor farther from 1 (review 12: omega =
+            // 1e-300 was blamed on friction.Vc).
+            let key = if omega.log10().abs() > vc.log10().abs() {
+                "friction.omega"
+            } else {
+                "friction.Vc"
+            };
             return Err(self.fail(
-                "friction.Vc",
+                key,
                 format!(
                     "omega Vc = {omega:e} × {vc:e} = {:e}: its square is out of the range of a double (about 1e-150 < omega Vc < 1e150 in the scene's length unit per second)",
                     omega * vc

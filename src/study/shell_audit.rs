@@ -452,7 +452,12 @@ pub fn markdown(scene: &ShellScene, rows: &[ShellAuditRow]) -> String {
         .contact
         .as_ref()
         .map_or((f64::NAN, f64::NAN), |c| (c.eta, c.k));
-    let (key, contact) = names(scene);
+    let (key, mut contact) = names(scene);
+    if contact == key {
+        // The scene's first probe is its total contact probe: the same
+        // column twice, said so (review 12).
+        contact = format!("(the key again) {contact}");
+    }
     let end = scene.solver.lambda_end;
     let mut s = format!(
         "Regularization audit of `{}` (scene eta = {eta:e} N, K = {k:e} N/m; deviations from the least regularized run of each sweep)\n\n",

@@ -98,6 +98,12 @@ fn slip_speed_out_of_double_range() {
         let p = scene_with(|s| s.replace("Vc = 1.0 ", &format!("Vc = {vc} ")), name);
         expect_error(&p, &["friction.Vc", "out of the range of a double"]);
     }
+    // Review 12: omega = 1e-300 was blamed on friction.Vc.
+    let p = scene_with(
+        |s| s.replace("omega = 0.1\n", "omega = 1e-300\n"),
+        "omegasmall",
+    );
+    expect_error(&p, &["friction.omega", "out of the range of a double"]);
 }
 
 #[test]
