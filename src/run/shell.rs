@@ -1168,7 +1168,7 @@ fn critical_points(
 fn record_event(rec: &mut Recorder, model: &ShellModel, e: Event) -> Result<EventRecord> {
     let k = rec.state.events.len() + 1;
     let full = model.expand(&e.mode, 0.0);
-    let wave = crate::output::mode::wavelength(&model.x0, &full);
+    let wave = crate::output::mode::wavelength(&model.x0, &model.a30, &model.quads(), &full);
     let mode = match &rec.dir {
         Some(d) => {
             let name = format!("mode_{k}.vtu");

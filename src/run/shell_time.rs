@@ -439,7 +439,8 @@ fn report(
     }
     for e in &mut events {
         let full = dae.model.expand(&e.vector, 0.0);
-        if let Some(w) = mode::wavelength(&dae.model.x0, &full) {
+        if let Some(w) = mode::wavelength(&dae.model.x0, &dae.model.a30, &dae.model.quads(), &full)
+        {
             e.wavelength = Some(w.wavelength);
             e.half_waves = Some(w.half_waves);
             e.wave_direction = Some(w.direction.to_string());

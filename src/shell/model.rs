@@ -166,6 +166,11 @@ pub struct ShellModel {
 }
 
 impl ShellModel {
+    /// The elements' node lists (the mesh's quadrilaterals).
+    pub fn quads(&self) -> Vec<[usize; 4]> {
+        self.elements.iter().map(|e| e.nodes).collect()
+    }
+
     /// The number users know node `n` (0-based) by: its tag in the mesh
     /// file, or n + 1 for a built-in mesh.
     pub fn node_tag(&self, n: usize) -> usize {

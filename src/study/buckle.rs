@@ -311,7 +311,7 @@ pub fn buckle(
     let mut modes = vec![];
     for (i, p) in pairs.into_iter().enumerate() {
         let full = model.expand(&p.vector, 0.0);
-        let wave = mode::wavelength(&model.x0, &full);
+        let wave = mode::wavelength(&model.x0, &model.a30, &model.quads(), &full);
         let vtk = match out_dir {
             Some(d) => {
                 crate::output::create_dir(d)?;
