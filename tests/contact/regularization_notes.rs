@@ -21,6 +21,20 @@ fn coarse(edits: &[(&str, &str)]) -> crate::scratch::ScratchFile {
     crate::scratch::ScratchFile::with_text("regularization-notes", "scene.toml", &text)
 }
 
+/// The run of plate-cylinder-coarse with `edits`, and its note that names
+/// `key`.
+fn noted(edits: &[(&str, &str)], key: &str) -> (anm::run::RunReport, String) {
+    let r = run_loaded(&load(&coarse(edits)).unwrap(), None, false).unwrap();
+    let note = r
+        .notes
+        .iter()
+        .find(|n| n.contains(key))
+        .unwrap_or_else(|| panic!("no {key} note: {:?}", r.notes))
+        .clone();
+    println!("{note}");
+    (r, note)
+}
+
 #[test]
 fn regularizations_that_carry_the_answer_are_noted() {
     // The canonical values carry neither note.
@@ -31,35 +45,13 @@ fn regularizations_that_carry_the_answer_are_noted() {
         r.notes
     );
     // 63 candidates x 1e3 N of possible pull against 3 x 10 N of load.
-    let r = run_loaded(
-        &load(&coarse(&[("eta = 1e-6", "eta = 1e3")])).unwrap(),
-        None,
-        false,
-    )
-    .unwrap();
-    let note = r
-        .notes
-        .iter()
-        .find(|n| n.contains("contact.eta"))
-        .unwrap_or_else(|| panic!("no eta note: {:?}", r.notes));
-    println!("{note}");
+    let (_, note) = noted(&[("eta = 1e-6", "eta = 1e3")], "contact.eta");
     assert!(
         note.contains("63 candidates") && note.contains("6.300e4"),
         "{note}"
     );
     // K = 10 N/m: the end's reactions (~1 N per node) sink nodes by ~0.1 m.
-    let r = run_loaded(
-        &load(&coarse(&[("k = 1e9", "k = 10.0")])).unwrap(),
-        None,
-        false,
-    )
-    .unwrap();
-    let note = r
-        .notes
-        .iter()
-        .find(|n| n.contains("contact.k"))
-        .unwrap_or_else(|| panic!("no K note: {:?}", r.notes));
-    println!("{note}");
+    let (r, note) = noted(&[("k = 1e9", "k = 10.0")], "contact.k");
     let depth: f64 = note
         .split(" ends ")
         .nth(1)
