@@ -10,8 +10,9 @@
 //! k² = ∫ w''² / ∫ w'² (finite differences on the line): exact for
 //! sin(k x) and 1 − cos(k x) alike, so a sine with m half-waves over a span
 //! a gives 2a/m, and a clamped–free column's n-th mode 1 − cos((2n − 1) pi
-//! x / 2L) gives 4L/(2n − 1). The dominant line is the one with the
-//! most half-waves k span / pi; the wavelength is 2 pi / k.
+//! x / 2L) gives 4L/(2n − 1). The line read is the one with the shortest
+//! wavelength 2 pi / k among those along which the mode varies by at least
+//! [`FLAT`] of its largest value; its half-waves are k × its length / pi.
 
 use super::vtk::{PointData, write_vtu};
 use crate::error::Result;
@@ -120,8 +121,19 @@ pub fn wavelength(
                 Box::new(move |i| full[dof(i, comp)]),
             )
         };
-    let mut best: Option<Wavelength> = None;
+    let largest = (0..n).map(|i| value(i).abs()).fold(0.0, f64::max);
+    let mut best: Option<(f64, Wavelength)> = None;
     for line in mesh_lines(quads, n, start) {
+        // A line along which the mode barely changes (a column's width,
+        // across which it varies by Poisson's ratio alone) has no wave.
+        let (lo, hi) = line
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &i| {
+                (lo.min(value(i)), hi.max(value(i)))
+            });
+        if hi - lo < FLAT * largest {
+            continue;
+        }
         let mut s = 0.0;
         let samples: Vec<(f64, f64)> = line
             .iter()
@@ -144,12 +156,21 @@ pub fn wavelength(
             wavelength: 2.0 * std::f64::consts::PI / k,
             component,
         };
-        if best.is_none_or(|b| w.half_waves > b.half_waves) {
-            best = Some(w);
+        // The shortest wavelength: the wrinkles' pitch across a strip
+        // rather than the length of their lobe along the path (review 13:
+        // 6.81 "half-waves" over the 3.63 m path of strip-wrinkling, whose
+        // mode has 3.05 across the width), m half-waves along a plate's
+        // side when a/m is shorter than 2b, and one across it otherwise.
+        if best.as_ref().is_none_or(|(kb, _)| k > *kb) {
+            best = Some((k, w));
         }
     }
-    best
+    best.map(|(_, w)| w)
 }
+
+/// A mesh line whose values vary by less than this fraction of the mode's
+/// largest is not read for a wave.
+const FLAT: f64 = 0.1;
 
 /// The mesh lines through `start`: chains of element edges that go
 /// straight on at every node (the edge opposite the one they came by: one

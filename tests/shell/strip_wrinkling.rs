@@ -75,6 +75,13 @@ fn strip_over_a_crowned_roll_wrinkles_in_the_span_before_it() {
             assert_eq!(e.kind, "bifurcation");
             assert_eq!(e.negative_pivots, Some((0, 1)));
             assert!(e.bracket <= 1e-6 * e.lambda, "{}", e.bracket);
+            // The wrinkles' pitch across the width (x; the path runs in
+            // y, z): review 13 found 6.81 "half-waves" along the 3.63 m
+            // path, the length of the mode's lobe, where the mode has ~3
+            // across (its own Rayleigh quotient across x: 3.05).
+            assert_eq!(e.wave_direction.as_deref(), Some("x"));
+            let waves = e.half_waves.expect("a wavelength");
+            assert!((2.5..3.5).contains(&waves), "{waves} half-waves");
             e.lambda
         }
         None => {
