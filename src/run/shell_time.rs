@@ -27,7 +27,9 @@ use crate::error::{Error, Result};
 use crate::output::plot::{Curve, Panel, draw};
 use crate::output::vtk::{PointData, write_vtu_cells};
 use crate::output::{Stop, csv_number, mode};
-use crate::scene::shell::{ShellScene, TIME_FORCE_COLUMNS, TIME_STABILITY_COLUMNS, Units};
+use crate::scene::shell::{
+    FrictionSpec, ShellScene, TIME_FORCE_COLUMNS, TIME_STABILITY_COLUMNS, Units,
+};
 use crate::series::ContinuationProblem;
 use crate::shell::friction_dae::{FrictionDae, TimeLaws, TimeState};
 use crate::shell::stability::{self, TimeEvent};
@@ -520,6 +522,9 @@ fn report(
             "t",
         ));
     }
+    report
+        .notes
+        .extend(scene.friction.as_ref().and_then(|f| cut_ramp(f, stop_t)));
     if let Some(law) = scene.friction.as_ref().map(|f| f.law) {
         // Review 10: an idler roller (its surface at the strip's speed)
         // kept the friction the load ramp had put on it; the exit tension
@@ -537,7 +542,7 @@ fn report(
             .max_by(|a, b| a.force.norm().total_cmp(&b.force.norm()))
         {
             report.notes.push(format!(
-                "{} of {} friction nodes stick at t = {stop_t} while carrying friction (up to {:.3e} at node {}, {:.2} of f R_N there): a sticking contact keeps the friction the load history put on it and sheds it only by the regularized creep, so these forces, and the tensions they hold, depend on friction.load_ramp and on friction.omega (docs/shell-friction.md); a roller that should pass the tension unchanged (an idler) needs its surface speed to differ from the strip's, or an omega and t_end that let the creep finish",
+                "{} of {} friction nodes stick at t = {stop_t} while carrying friction (up to {:.3e} at node {}, {:.2} of f R_N there): a sticking contact keeps the friction the load history put on it and sheds it only by the regularized creep, so these forces, and the tensions they hold, depend on friction.load_ramp and on friction.omega (docs/shell-friction.md); where this friction is not meant to hold them (an idler roller that should pass the tension unchanged), the roller's surface speed must differ from the strip's, or omega and t_end must let the creep finish",
                 held.len(),
                 last.friction.len(),
                 most.force.norm(),
@@ -551,7 +556,15 @@ fn report(
             .map(|f| f.slip.norm())
             .filter(|&v| friction_state(&law, v).0 == "transition")
             .collect();
-        if let Some(fastest) = speeds.iter().copied().reduce(f64::max) {
+        // At a breakaway the creep speeds grow without bound on their way
+        // to slip: no omega separates them (review 13).
+        let breakaway = report.stop.reason == "singularity";
+        if let Some(fastest) = speeds
+            .iter()
+            .copied()
+            .reduce(f64::max)
+            .filter(|_| !breakaway)
+        {
             report.notes.push(format!(
                 "{} of {} friction nodes at t = {stop_t} slip at speeds between omega Vc = {:.3e} and 10 omega Vc = {:.3e} (up to {fastest:.3e}): `transition` in friction.csv (0.5 in friction.vtu's stick), where the regularization, not the mechanics, decides stick or slip; a friction.omega below {:.1e} separates them",
                 speeds.len(),
@@ -743,4 +756,39 @@ fn plot(path: &Path, units: Units, head: &[String], rows: &[Vec<f64>]) -> Result
             },
         ],
     )
+}
+
+/// A note when the run ends inside a ramp of its loads or of its
+/// obstacles' motions: the scene's values were never reached (review 13:
+/// t_end = 0.25 s inside a motion ramp over [0.2, 0.3] s left the roller at
+/// half its speed, without a word).
+fn cut_ramp(f: &FrictionSpec, t_end: f64) -> Option<String> {
+    let ramps = [
+        ("friction.load_ramp", f.load),
+        ("friction.motion_ramp", f.motion),
+    ]
+    .into_iter()
+    .map(|(k, r)| (k.to_string(), r))
+    .chain(
+        f.load_ramps
+            .iter()
+            .map(|(i, r)| (format!("load[{i}].ramp"), *r)),
+    );
+    let cut: Vec<String> = ramps
+        .filter(|(_, r)| t_end < r.end)
+        .map(|(k, r)| {
+            format!(
+                "{k} [{}, {}] at {:.3} of its full value",
+                r.start,
+                r.end,
+                r.value(t_end)
+            )
+        })
+        .collect();
+    (!cut.is_empty()).then(|| {
+        format!(
+            "the run ends at t = {t_end} inside its ramps ({}): the scene's loads or speeds were not all reached",
+            cut.join("; ")
+        )
+    })
 }

@@ -34,6 +34,12 @@ pub struct TimeRunRecord {
     pub max_residual: f64,
     #[serde(with = "exact")]
     pub wall_s: f64,
+    /// The run's notes (sticking friction, cut ramps ...): the audit
+    /// shows them under its table (review 13: an idler's omega sweep
+    /// ranked the runs against the one farthest from physics, and none of
+    /// the runs' notes on the friction left from the ramp reached it).
+    #[serde(default)]
+    pub notes: Vec<String>,
 }
 
 /// One item: a parameter value and its run, or the error that stopped it.
@@ -79,6 +85,13 @@ pub fn with_parameter(scene: &ShellScene, parameter: &str, value: f64) -> Result
         key: format!("--{parameter}"),
         problem,
     };
+    if parameter == "eta" && value == 0.0 {
+        // As `anm check` says it (review 13: the audit's help calls 0 the
+        // penalty law, which holds for frictionless scenes only).
+        return Err(bad(
+            "0 (the penalty law) is for frictionless scenes: with [friction], contact.eta must be > 0".into(),
+        ));
+    }
     if !(value.is_finite() && value > 0.0) {
         return Err(bad(format!("values must be finite and > 0, got {value}")));
     }
@@ -127,6 +140,7 @@ pub fn run_item(parameter: &str, value: f64, scene: &ShellScene) -> TimeAuditIte
             factorizations: r.factorizations,
             max_residual: r.max_residual,
             wall_s: r.wall_s,
+            notes: r.notes,
         }),
         Ok(Err(e)) => Err(e.to_string()),
         Err(panic) => Err(format!("panicked: {panic}")),
@@ -213,13 +227,13 @@ pub fn rows(scene: &ShellScene, items: &[TimeAuditItem]) -> Vec<TimeAuditRow> {
                         parameter: name.to_string(),
                         value: it.value,
                         stop: r.stop.clone(),
-                        message: None,
+                        message: (!r.notes.is_empty()).then(|| r.notes.join("; ")),
                         key,
-                        key_deviation: (key - key_ref).abs() / key_ref.abs(),
+                        key_deviation: deviation(key, key_ref),
                         contact,
-                        contact_deviation: (contact - contact_ref).abs() / contact_ref.abs(),
+                        contact_deviation: deviation(contact, contact_ref),
                         slip_area: slip,
-                        slip_area_deviation: (slip - slip_ref).abs() / slip_ref.abs(),
+                        slip_area_deviation: deviation(slip, slip_ref),
                         trajectory_deviation: trajectory,
                         reference: ref_label.clone(),
                         steps: r.steps,
@@ -489,5 +503,25 @@ impl Sweep for TimeAudit {
             markdown: markdown(&self.scene, &rows),
             failed: false,
         })
+    }
+}
+
+/// |a − b| / |b|; |a − b| where the reference b is 0 (review 13: an idler's
+/// slip area, 0 in every run, gave 0/0 = NaN in audit.md and audit.csv).
+fn deviation(a: f64, b: f64) -> f64 {
+    if b == 0.0 {
+        (a - b).abs()
+    } else {
+        (a - b).abs() / b.abs()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn a_zero_reference_gives_the_absolute_deviation() {
+        assert_eq!(super::deviation(0.0, 0.0), 0.0);
+        assert_eq!(super::deviation(0.25, 0.0), 0.25);
+        assert_eq!(super::deviation(1.5, 2.0), 0.25);
     }
 }

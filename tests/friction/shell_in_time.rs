@@ -375,6 +375,35 @@ fn the_audit_measures_omega_share_of_the_capstan_tension() {
     };
     let e = jobs(&sc, &bad).expect_err("negative omega");
     assert!(e.to_string().contains("--omega"), "{e}");
+    // Review 13: eta = 0 was refused as "must be > 0" while the audit's
+    // help calls it the penalty law; the reason is the friction.
+    let zero = Sweeps {
+        omega: vec![],
+        eta: vec![0.0],
+        ..bad
+    };
+    let e = jobs(&sc, &zero).expect_err("eta = 0 with friction");
+    assert!(e.to_string().contains("frictionless scenes"), "{e}");
+}
+
+/// Review 13: t_end inside a ramp ended the run with the scene's speeds or
+/// loads never reached, without a word.
+#[test]
+fn a_run_that_ends_inside_its_ramps_says_so() {
+    let mut sc = capstan(90.0, 0.2);
+    let f = sc.friction.as_mut().expect("friction");
+    f.t_end = 0.25;
+    let r = shell_time::run(&sc, None).expect("run");
+    let note = r
+        .notes
+        .iter()
+        .find(|n| n.contains("inside its ramps"))
+        .unwrap_or_else(|| panic!("no note: {:?}", r.notes));
+    println!("{note}");
+    assert!(
+        note.contains("friction.load_ramp [0, 0.5] at 0.500"),
+        "{note}"
+    );
 }
 
 /// Review 8: the last row of a run in time (t = t_end, the state friction.csv,
