@@ -525,6 +525,18 @@ fn report(
     report
         .notes
         .extend(scene.friction.as_ref().and_then(|f| cut_ramp(f, stop_t)));
+    if !monitored && let (Some(grid), Some(f)) = (&scene.mesh.grid, &scene.friction) {
+        let along = along_strip::rows(
+            &dae.model,
+            grid,
+            &scene.mesh.quads,
+            scene.thickness,
+            &last.full,
+            &last.friction,
+            slip_threshold(&f.law),
+        );
+        report.notes.extend(unmonitored_compression(&along, stop_t));
+    }
     if let Some(law) = scene.friction.as_ref().map(|f| f.law) {
         // Review 10: an idler roller (its surface at the strip's speed)
         // kept the friction the load ramp had put on it; the exit tension
@@ -789,6 +801,29 @@ fn cut_ramp(f: &FrictionSpec, t_end: f64) -> Option<String> {
         format!(
             "the run ends at t = {t_end} inside its ramps ({}): the scene's loads or speeds were not all reached",
             cut.join("; ")
+        )
+    })
+}
+
+/// A note when a strip run without `friction.stability` ends compressed
+/// across its width (review 13: the crowned roll's strip at −0.81 MPa
+/// across, near its wrinkling onset, and not a word that wrinkling was not
+/// checked). Compression below 1 % of the largest stress along the strip
+/// is left out.
+fn unmonitored_compression(along: &[along_strip::AlongRow], t: f64) -> Option<String> {
+    let largest = along
+        .iter()
+        .map(|r| r.stress_along.abs())
+        .fold(0.0, f64::max);
+    let least = along
+        .iter()
+        .min_by(|a, b| a.stress_across_min.total_cmp(&b.stress_across_min))?;
+    (least.stress_across_min < -0.01 * largest).then(|| {
+        format!(
+            "the strip ends compressed across its width (down to {:.3e} at s = {:.4}, t = {t}; {:.2} of the largest stress along it): friction.stability is off, so a wrinkling onset was not looked for; set it to true to locate one",
+            least.stress_across_min,
+            least.s,
+            -least.stress_across_min / largest.max(f64::MIN_POSITIVE)
         )
     })
 }

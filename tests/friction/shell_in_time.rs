@@ -437,3 +437,36 @@ fn the_final_state_in_time_slips_at_the_roller_speed() {
     );
     assert!(worst < 1e-9, "{worst:e}");
 }
+
+/// Review 13: a strip run over the crowned roll without
+/// `friction.stability` ended compressed across its width (−0.81 MPa), near
+/// its wrinkling onset, without a word that wrinkling was not looked for.
+/// Coarse (6 across, 0.2 m elements) and stopped at 0.3 s: 9 s. The
+/// capstan, pulled along a plain roller, carries no such note.
+#[test]
+fn a_strip_compressed_across_without_the_stability_monitor_says_so() {
+    let text = std::fs::read_to_string("scenes/strip-wrinkling-friction.toml")
+        .expect("scene")
+        .replace("element_length = 0.1\n", "element_length = 0.2\n")
+        .replace("arc_element_length = 0.05", "arc_element_length = 0.1")
+        .replace("divisions_across = 20", "divisions_across = 6")
+        .replace("t_end = 1.0", "t_end = 0.3")
+        .replace("output_step = 0.025", "output_step = 0.05")
+        .replace("stability = true", "stability = false");
+    assert!(text.contains("divisions_across = 6") && text.contains("stability = false"));
+    let path = crate::scratch::ScratchFile::with_text("unmonitored", "crown.toml", &text);
+    let r = shell_time::run(&load(&path).expect("scene loads"), None).expect("run");
+    let note = r
+        .notes
+        .iter()
+        .find(|n| n.contains("compressed across"))
+        .unwrap_or_else(|| panic!("no note: {:?}", r.notes));
+    println!("{note}");
+    assert!(note.contains("friction.stability is off"), "{note}");
+    let r = shell_time::run(&capstan(90.0, 0.2), None).expect("capstan");
+    assert!(
+        !r.notes.iter().any(|n| n.contains("compressed across")),
+        "{:?}",
+        r.notes
+    );
+}
