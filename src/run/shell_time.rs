@@ -522,9 +522,13 @@ fn report(
             "t",
         ));
     }
-    report
-        .notes
-        .extend(scene.friction.as_ref().and_then(|f| cut_ramp(f, stop_t)));
+    report.notes.extend(
+        scene
+            .friction
+            .as_ref()
+            .filter(|_| report.stop.reason == "end")
+            .and_then(|f| cut_ramp(f, stop_t)),
+    );
     if !monitored && let (Some(grid), Some(f)) = (&scene.mesh.grid, &scene.friction) {
         let along = along_strip::rows(
             &dae.model,
