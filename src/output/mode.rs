@@ -109,19 +109,17 @@ pub fn wavelength(
     if big == 0.0 {
         return None;
     }
-    let normal = |i: usize| u(i).dot(&normals[i]);
-    let top_normal = (0..n).max_by(|&a, &b| normal(a).abs().total_cmp(&normal(b).abs()))?;
-    let (start, component, value): (usize, &'static str, Box<dyn Fn(usize) -> f64>) =
-        if normal(top_normal).abs() >= 0.5 * big {
-            (top_normal, "un", Box::new(normal))
-        } else {
-            (
-                node,
-                ["ux", "uy", "uz"][comp],
-                Box::new(move |i| full[dof(i, comp)]),
-            )
-        };
-    let largest = (0..n).map(|i| value(i).abs()).fold(0.0, f64::max);
+    let normal: Vec<f64> = (0..n).map(|i| u(i).dot(&normals[i])).collect();
+    let top_normal = (0..n).max_by(|&a, &b| normal[a].abs().total_cmp(&normal[b].abs()))?;
+    // The values read: the normal displacement, or the largest component.
+    let (start, component, values) = if normal[top_normal].abs() >= 0.5 * big {
+        (top_normal, "un", normal)
+    } else {
+        let values = (0..n).map(|i| full[dof(i, comp)]).collect();
+        (node, ["ux", "uy", "uz"][comp], values)
+    };
+    let value = |i: usize| values[i];
+    let largest = values.iter().fold(0.0f64, |m, v| m.max(v.abs()));
     let mut best: Option<(f64, Wavelength)> = None;
     for line in mesh_lines(quads, n, start) {
         // A line along which the mode barely changes (a column's width,

@@ -34,12 +34,8 @@ pub fn inside(model: &ShellModel, obstacles: &[Obstacle], full: &[f64], at: f64)
     let floor = 1e-9 * model.length_scale;
     let mut found: Option<Inside> = None;
     let mut nodes = 0;
-    for (node, x0) in model.x0.iter().enumerate() {
-        if candidate[node] {
-            continue;
-        }
-        let i = crate::fe::dof::index(node, 0);
-        let x = x0 + nalgebra::Vector3::new(full[i], full[i + 1], full[i + 2]);
+    for (node, _) in candidate.iter().enumerate().filter(|(_, c)| !**c) {
+        let x = model.position(full, node);
         let deepest = obstacles
             .iter()
             .enumerate()

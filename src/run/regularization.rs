@@ -52,8 +52,7 @@ pub fn sink_note(
         .pairs
         .iter()
         .filter_map(|p| {
-            let i = crate::fe::dof::index(p.node, 0);
-            let x = model.x0[p.node] + nalgebra::Vector3::new(full[i], full[i + 1], full[i + 2]);
+            let x = model.position(full, p.node);
             Some((-obstacles[p.obstacle].distance(&x)?, p))
         })
         .max_by(|a, b| a.0.total_cmp(&b.0))?;

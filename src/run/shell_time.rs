@@ -529,8 +529,10 @@ fn report(
             .filter(|_| report.stop.reason == "end")
             .and_then(|f| cut_ramp(f, stop_t)),
     );
-    if !monitored && let (Some(grid), Some(f)) = (&scene.mesh.grid, &scene.friction) {
-        let along = along_strip::rows(
+    // The strip's rows along its path: along.csv, and the compression
+    // note of a run without the stability monitor.
+    let along = match (&scene.mesh.grid, &scene.friction) {
+        (Some(grid), Some(f)) => Some(along_strip::rows(
             &dae.model,
             grid,
             &scene.mesh.quads,
@@ -538,8 +540,11 @@ fn report(
             &last.full,
             &last.friction,
             slip_threshold(&f.law),
-        );
-        report.notes.extend(unmonitored_compression(&along, stop_t));
+        )),
+        _ => None,
+    };
+    if !monitored && let Some(along) = &along {
+        report.notes.extend(unmonitored_compression(along, stop_t));
     }
     if let Some(law) = scene.friction.as_ref().map(|f| f.law) {
         // Review 10: an idler roller (its surface at the strip's speed)
@@ -650,18 +655,9 @@ fn report(
         if scene.output.plot && rows.len() > 1 {
             super::shell::probe_plot(&dir.join("plot.svg"), scene, "t (s)", &rows, 2)?;
         }
-        if let Some(grid) = &scene.mesh.grid {
-            let along = along_strip::rows(
-                &dae.model,
-                grid,
-                &scene.mesh.quads,
-                scene.thickness,
-                &last.full,
-                &last.friction,
-                slip_threshold(&law),
-            );
-            along_strip::write_csv(&dir.join("along.csv"), &along)?;
-            along_strip::plot(&dir.join("along.svg"), scene.units, &along)?;
+        if let Some(along) = &along {
+            along_strip::write_csv(&dir.join("along.csv"), along)?;
+            along_strip::plot(&dir.join("along.svg"), scene.units, along)?;
         }
         if monitored {
             write_events(dir, &dae, &scene.mesh.quads, &mut report.events)?;

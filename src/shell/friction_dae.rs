@@ -147,12 +147,6 @@ impl FrictionDae {
         [self.laws.motion.value(t), self.laws.motion.rate(t)]
     }
 
-    /// Node position x = X + v from a full vector.
-    fn position(&self, full: &[f64], node: usize) -> Vector3<f64> {
-        self.model.x0[node]
-            + Vector3::new(full[dof(node, 0)], full[dof(node, 1)], full[dof(node, 2)])
-    }
-
     /// Linearizes at the state: the static tangent, the friction tapes of
     /// the active pairs, the augmented matrix and its factorization. Errors
     /// name the node of a problem.
@@ -183,7 +177,7 @@ impl FrictionDae {
                 continue;
             }
             let ob = &self.model.obstacles[pair.obstacle];
-            let x = self.position(&full, pair.node);
+            let x = self.model.position(&full, pair.node);
             let h0 = ob.gap(&x).map(|g| g.h).ok_or_else(|| Error::NonFinite {
                 step: 0,
                 param: "t",
@@ -368,7 +362,7 @@ impl FrictionDae {
         let xs: Vec<Vector3<f64>> = self
             .pairs
             .iter()
-            .map(|fp| self.position(&full, fp.node))
+            .map(|fp| self.model.position(&full, fp.node))
             .collect();
         for (i, fp) in self.pairs.iter_mut().enumerate() {
             let x = xs[i];
@@ -562,7 +556,7 @@ impl FrictionDae {
         let full = self.model.expand(u, self.laws.load.value(t));
         self.pairs
             .iter()
-            .map(|fp| self.position(&full, fp.node))
+            .map(|fp| self.model.position(&full, fp.node))
             .collect()
     }
 

@@ -380,8 +380,13 @@ impl ShellModel {
     /// Current mid-surface positions from a full vector.
     pub fn positions(&self, full: &[f64]) -> Vec<Vec3> {
         (0..self.n_nodes())
-            .map(|i| self.x0[i] + Self::vec3(full, i, 0))
+            .map(|i| self.position(full, i))
             .collect()
+    }
+
+    /// Current mid-surface position x = X + v of `node` from a full vector.
+    pub fn position(&self, full: &[f64], node: usize) -> Vec3 {
+        self.x0[node] + Self::vec3(full, node, 0)
     }
 
     /// Current directors from a full vector.
