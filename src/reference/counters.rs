@@ -58,4 +58,20 @@ impl Counters {
             convergence_failures: 0,
         }
     }
+
+    /// The ANM's counters of a shell run in time (`anm run` on a scene
+    /// with `[friction]`): tangents are factorized once each, rejected
+    /// implicit trials are its error-test failures.
+    pub fn from_shell_time(s: &crate::shell::time_path::TimeStats) -> Self {
+        Self {
+            steps: s.steps as u64,
+            residual_evaluations: s.residual_evaluations as u64,
+            jacobian_evaluations: s.factorizations as u64,
+            factorizations: s.factorizations as u64,
+            linear_solves: s.solves as u64,
+            nonlinear_iterations: s.corrections as u64,
+            error_test_failures: s.rejected as u64,
+            convergence_failures: 0,
+        }
+    }
 }

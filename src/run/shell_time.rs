@@ -64,6 +64,9 @@ pub struct TimeReport {
     pub corrections: usize,
     pub max_residual: f64,
     pub wall_s: f64,
+    /// The cost counters under the names every time run uses (IDA's
+    /// and the point-mass runs' summary.json `counters`).
+    pub counters: crate::reference::counters::Counters,
     /// `reason`: "end", "singularity", "interrupted", or the kind of the
     /// numerical trouble that stopped the run (e.g. "time_steps"); `t`;
     /// `node`: the mesh tag of a singularity's node, or of the node a
@@ -489,6 +492,7 @@ fn report(
         corrections: run.stats.corrections,
         max_residual: run.stats.max_residual,
         wall_s,
+        counters: crate::reference::counters::Counters::from_shell_time(&run.stats),
         stop: Stop {
             reason: reason.into(),
             t: Some(stop_t),

@@ -105,6 +105,11 @@ pub struct FrictionDae {
     /// Contact nodes left without friction (a fixed translation).
     pub skipped: Vec<usize>,
     pub factorizations: usize,
+    /// Triangular solves with the factorization (series orders, Newton
+    /// and quasi-Newton corrections): summary.json `counters`.
+    pub solves: std::cell::Cell<usize>,
+    /// Evaluations of the equilibrium residual E(U, w, t).
+    pub residual_evaluations: usize,
 }
 
 impl FrictionDae {
@@ -127,6 +132,8 @@ impl FrictionDae {
             row_scale: 1.0,
             skipped: vec![],
             factorizations: 0,
+            solves: std::cell::Cell::new(0),
+            residual_evaluations: 0,
         }
     }
 
@@ -349,6 +356,7 @@ impl FrictionDae {
     /// Equilibrium residual E(U, w, t) on the free dofs at the state (the
     /// tapes of the last linearization are re-evaluated at it).
     pub fn residual(&mut self, s: &TimeState) -> Result<Vec<f64>> {
+        self.residual_evaluations += 1;
         let [lam0, _] = self.lambda(s.t);
         let [m0, _] = self.motion_factor(s.t);
         let mut r = self.model.residual(&s.u, lam0)?;
@@ -568,6 +576,7 @@ impl FrictionDae {
     /// Solves with the last factorization.
     pub fn solve(&self, rhs: &[f64], t: f64) -> Result<Vec<f64>> {
         let f = self.factor.as_ref().expect("linearize before solving");
+        self.solves.set(self.solves.get() + 1);
         let x = f.solve(rhs);
         if x.iter().all(|v| v.is_finite()) {
             Ok(x)

@@ -127,6 +127,12 @@ pub struct TimeStats {
     pub factorizations: usize,
     pub corrections: usize,
     pub max_residual: f64,
+    /// Triangular solves and residual evaluations (0 in a checkpoint
+    /// written before they were counted).
+    #[serde(default)]
+    pub solves: usize,
+    #[serde(default)]
+    pub residual_evaluations: usize,
 }
 
 impl TimeStats {
@@ -140,6 +146,8 @@ impl TimeStats {
             factorizations: self.factorizations + later.factorizations,
             corrections: self.corrections + later.corrections,
             max_residual: self.max_residual.max(later.max_residual),
+            solves: self.solves + later.solves,
+            residual_evaluations: self.residual_evaluations + later.residual_evaluations,
         }
     }
 }
@@ -341,6 +349,8 @@ fn finish(
     mut stats: TimeStats,
 ) -> TimeRun {
     stats.factorizations = dae.factorizations;
+    stats.solves = dae.solves.get();
+    stats.residual_evaluations = dae.residual_evaluations;
     TimeRun {
         samples,
         stop,

@@ -497,3 +497,33 @@ fn a_slack_or_barely_loaded_strip_is_not_blamed_on_a_pull() {
         assert!(e.contains(cause), "{e}");
     }
 }
+
+/// summary.json `counters` of a shell run in time: the names every time
+/// run uses (IDA's, the point-mass runs'), filled from the run's own
+/// counts; every step solves with a factorization and evaluates the
+/// residual at least once.
+#[test]
+fn a_shell_run_in_time_reports_the_common_counters() {
+    let dir = std::env::temp_dir().join("anm-shell-time-counters");
+    let _ = std::fs::remove_dir_all(&dir);
+    let r = shell_time::run(&capstan(90.0, 0.1), Some(&dir)).expect("runs to t_end");
+    assert_eq!(r.stop, "end");
+    let c = r.counters;
+    println!("{c:?}");
+    assert_eq!(c.steps, r.steps as u64);
+    assert_eq!(c.factorizations, r.factorizations as u64);
+    assert_eq!(c.error_test_failures, r.rejected as u64);
+    assert_eq!(c.nonlinear_iterations, r.corrections as u64);
+    assert!(c.linear_solves >= c.steps && c.linear_solves >= c.factorizations);
+    assert!(c.residual_evaluations >= c.steps);
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).expect("summary"))
+            .expect("json");
+    let written = summary["counters"].as_object().expect("counters");
+    let mut names: Vec<&str> = written.keys().map(String::as_str).collect();
+    let mut expected = anm::reference::counters::Counters::NAMES.to_vec();
+    names.sort_unstable();
+    expected.sort_unstable();
+    assert_eq!(names, expected);
+    assert_eq!(written["linear_solves"].as_u64(), Some(c.linear_solves));
+}
