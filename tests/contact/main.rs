@@ -12,3 +12,4 @@ mod outside_the_group;
 mod plate_cylinder;
 mod propped_cantilever;
 mod regularization_notes;
+mod supported_strip;
