@@ -526,7 +526,7 @@ fn run_inner(
                     // A singular point estimated past lambda_end lies where
                     // the run does not go (an Euler column ending at 1.2
                     // reported one at 102 before its bifurcation at 1.03).
-                    let e = bifurcation::geometric(&step, g.distance);
+                    let e = bifurcation::geometric(&step, &g);
                     if (e.lambda - cfg.lambda_end) * cfg.lambda_end.signum() <= 0.0 {
                         events.push(e);
                     }

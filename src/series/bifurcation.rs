@@ -483,25 +483,16 @@ pub fn limit_point(step: &PathStep) -> Event {
 /// The geometric event of a step whose terms passed the Cochelin–Medale
 /// test (module docs): lambda at a = alpha_1 of the series with its
 /// geometric part removed, mode U_N / |U_N|.
-pub fn geometric(step: &PathStep, alpha: f64) -> Event {
-    let n = step.lambda.len() - 1;
-    let ln = step.lambda[n];
-    let mut lambda = step.lambda[0];
-    for p in 1..n {
-        let lp = step.lambda[p] - alpha.powi((n - p) as i32) * ln;
-        lambda += alpha.powi(p as i32) * lp;
-    }
-    let un = &step.u[n];
-    let s = crate::linalg::norm(un).max(f64::MIN_POSITIVE);
+pub fn geometric(step: &PathStep, g: &super::geometric::GeometricSeries) -> Event {
     Event {
         kind: Kind::Geometric,
-        lambda,
+        lambda: g.lambda,
         step: step.index,
-        a: alpha,
+        a: g.distance,
         negative_pivots: None,
         bracket: 0.0,
         kappa: f64::NAN,
         factorizations: 0,
-        mode: un.iter().map(|v| v / s).collect(),
+        mode: step.singular_mode.clone(),
     }
 }

@@ -201,8 +201,11 @@ pub struct PathStep {
     pub a_poly: f64,
     /// Evaluate with Padé instead of the polynomial.
     pub pade: Option<pade::Pade>,
-    /// Geometric series found in the last terms (Cochelin-Medale test).
+    /// Geometric series found in the last terms (Cochelin-Medale test);
+    /// `u` and `lambda` then hold the series with it removed (one order
+    /// less) and `singular_mode` its direction U_N / |U_N|.
     pub geometric: Option<GeometricSeries>,
+    pub singular_mode: Vec<f64>,
     /// Relative residual at the step end, before any correction.
     pub end_residual: f64,
     /// End point after correction.
@@ -249,6 +252,7 @@ impl PathStep {
             a_poly: length,
             pade: None,
             geometric: None,
+            singular_mode: vec![],
             end_residual: 0.0,
             u_end: vec![],
             lambda_end: 0.0,
@@ -499,6 +503,7 @@ mod tests {
             a_poly: 1.0,
             pade: None,
             geometric: None,
+            singular_mode: vec![],
             end_residual: 0.0,
             u_end: vec![1.0],
             lambda_end: 0.0,

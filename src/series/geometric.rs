@@ -10,6 +10,9 @@ use crate::linalg::{dot, norm};
 pub struct GeometricSeries {
     /// Distance (in the path parameter) to the singular point, alpha_1.
     pub distance: f64,
+    /// lambda there, on the series with the geometric part removed (set by
+    /// the step, [`super::path`]; NaN from the test alone).
+    pub lambda: f64,
 }
 
 /// Applies the test to `terms[1..=N]` (needs N >= 10). Thresholds are those of
@@ -55,7 +58,10 @@ pub fn detect_tail<T: AsRef<[f64]>>(n: usize, tail: &[T]) -> Option<GeometricSer
         }
         direction_dev += diff2.sqrt() / den;
     }
-    (ratio_dev <= 1e-5 && direction_dev <= 1e-4).then_some(GeometricSeries { distance: alpha[0] })
+    (ratio_dev <= 1e-5 && direction_dev <= 1e-4).then_some(GeometricSeries {
+        distance: alpha[0],
+        lambda: f64::NAN,
+    })
 }
 
 #[cfg(test)]

@@ -290,6 +290,11 @@ const EARLY_KINK_ORDERS: [usize; 3] = [3, 6, 10];
 const EARLY_KINK_REACH: f64 = 0.25;
 
 /// The scaled terms T̃_p = (Ũ_p, λ̃_p, y_p) of orders 0..=p, each written
+/// Largest share of the load in a geometric part (scaled |lambda_N| over
+/// |T_N|) for which the part is taken as a bifurcated branch and removed
+/// from the step ([`series_step`]).
+const OFF_BRANCH_LOAD_SHARE: f64 = 1e-3;
+
 /// once into its own buffer, the orders on every thread.
 fn stacked(metric: &Metric, us: &[Vec<f64>], ls: &[f64], ys: &[Vec<f64>]) -> Vec<Vec<f64>> {
     us.par_iter()
@@ -470,13 +475,51 @@ pub(crate) fn series_step<P: ContinuationProblem + ?Sized>(
             what: format!("series terms (|U_1| = {n1:e}, |U_{n_ord}| = {nn:e}, scaled)"),
         });
     }
-    let (a_poly, cap) = ratio_length(&terms, cfg.eps);
     // Truncated before a kink, the step ends there: no tail to test.
     let geometric = if early_kink.is_some() {
         None
     } else {
         geometric::detect(&terms)
     };
+    // A geometric series in the last terms is a singular point ahead at
+    // a = alpha_1. Where it moves the load by (almost) nothing, it is the
+    // null direction of a nearly singular tangent at fixed load, seeded by
+    // round-off and amplified order by order: a bifurcated branch, not the
+    // one the path is on. The step then follows the series with it removed
+    // (Cochelin & Medale 2013, §3.2: T_p − alpha_1^(N−p) T_N, p < N),
+    // whose radius reaches past the point: it stays on its branch where
+    // steps shrinking toward the point let the amplified part take the
+    // path onto the other one (review 14: a pinned arch went round the
+    // whole asymmetric loop, labelled "primary"). A geometric part that
+    // moves the load is the path's own singularity (a contact law's switch:
+    // load share 0.99 of the part on the spring of tests/contact; 1.5e-10
+    // to 2.2e-6 on the arch's bifurcations) and is kept.
+    let mut singular_mode = vec![];
+    let mut geometric = geometric;
+    let off_branch = geometric.is_some_and(|_| {
+        let tn = &terms[n_ord];
+        metric.l(ls[n_ord]).abs() <= OFF_BRANCH_LOAD_SHARE * norm(tn)
+    });
+    let terms = match geometric.as_mut() {
+        Some(g) if off_branch => {
+            let un = us.pop().expect("order N");
+            let ln = ls.pop().expect("order N");
+            let yn = ys.pop().expect("order N");
+            for p in 1..n_ord {
+                let w = g.distance.powi((n_ord - p) as i32);
+                us[p].iter_mut().zip(&un).for_each(|(x, v)| *x -= w * v);
+                ls[p] -= w * ln;
+                ys[p].iter_mut().zip(&yn).for_each(|(x, v)| *x -= w * v);
+            }
+            g.lambda = super::taylor::eval(&ls, g.distance);
+            let s = norm(&un).max(f64::MIN_POSITIVE);
+            singular_mode = un.iter().map(|v| v / s).collect();
+            stacked(metric, &us, &ls, &ys)
+        }
+        _ => terms,
+    };
+    let n_ord = us.len() - 1;
+    let (a_poly, cap) = ratio_length(&terms, cfg.eps);
     let mut step = PathStep {
         index,
         u: us,
@@ -485,6 +528,7 @@ pub(crate) fn series_step<P: ContinuationProblem + ?Sized>(
         a_poly,
         pade: None,
         geometric,
+        singular_mode,
         end_residual: 0.0,
         u_end: vec![],
         lambda_end: 0.0,

@@ -33,7 +33,11 @@ fn the_supports_carry_their_share_of_a_load_over_a_supported_edge() {
         q * (l - a),
         q * a
     );
-    assert!((support - q * a).abs() <= 1e-3 * q * a, "{support} vs {}", q * a);
+    assert!(
+        (support - q * a).abs() <= 1e-3 * q * a,
+        "{support} vs {}",
+        q * a
+    );
     assert!(
         (contact - q * (l - a)).abs() <= 1e-3 * q * l,
         "{contact} vs {}",
