@@ -36,7 +36,8 @@ pub enum Error {
         detail: String,
     },
     #[error(
-        "step {step}, {param} = {at:.9e}: no convergence after {iterations} iterations (residual {residual:.3e}, tolerance {tolerance:.1e})"
+        "step {step}, {param} = {at:.9e}: no convergence after {iterations} iterations (residual {residual:.3e}, tolerance {tolerance:.1e}){hint}",
+        hint = floor_hint(*.residual, *.tolerance)
     )]
     NoConvergence {
         step: usize,
@@ -187,3 +188,19 @@ impl Error {
 }
 
 pub type Result<T> = std::result::Result<T, Error>;
+
+/// What a Newton iteration that stalled just above its tolerance most
+/// likely met: the round-off floor of the residual (fine or thin meshes,
+/// stiff penalties), which `solver.residual_tol` must lie above (review
+/// 14: an 800-element arch stalled at 1.9e-6 against 1e-6 and ran with
+/// 1e-5).
+fn floor_hint(residual: f64, tolerance: f64) -> String {
+    if residual.is_finite() && residual > tolerance && residual <= 100.0 * tolerance {
+        format!(
+            ": it stalled within {:.0}x of solver.residual_tol, likely the round-off floor of this problem's residual; a larger solver.residual_tol lets the run go on",
+            (residual / tolerance).ceil()
+        )
+    } else {
+        String::new()
+    }
+}

@@ -439,7 +439,7 @@ fn run_inner(
                 lambda_scale: cfg.lambda_scale,
                 ..Default::default()
             };
-            let stop = loop {
+            let stop = 'path: loop {
                 if interrupt::requested() {
                     break PathStop::Interrupted {
                         lambda: path.state().1,
@@ -483,7 +483,11 @@ fn run_inner(
                     .collect();
                 for (a, g, u) in points {
                     let before = grid_stats.factorizations;
-                    let (u, iterations) = correct::correct_at_lambda(
+                    // A grid point that cannot be corrected is numerical
+                    // trouble like a step's: the run stops with its
+                    // diagnosis in summary.json (exit 2), not as an error
+                    // without one (reviews 14 and 16).
+                    let (u, iterations) = match correct::correct_at_lambda(
                         model,
                         u,
                         g,
@@ -494,7 +498,11 @@ fn run_inner(
                         &mut grid_lu,
                         &mut grid_stats,
                         step.index,
-                    )?;
+                    ) {
+                        Ok(c) => c,
+                        Err(e) if e.is_numerical() => break 'path PathStop::Failed(e),
+                        Err(e) => return Err(e),
+                    };
                     if iterations > 0 {
                         rec.state.grid_corrections += 1;
                     }
@@ -902,8 +910,10 @@ fn run_inner(
     if out_dir.is_some() {
         finish_files(&mut rec, &model, &full_last, lambda_last, !interrupted)?;
     }
-    if let (Some(d), PathStop::End { .. }) = (out_dir, &stop) {
-        // A finished run has nothing to resume.
+    if let (Some(d), PathStop::End { .. } | PathStop::Failed(_)) = (out_dir, &stop) {
+        // A finished run has nothing to resume, and one stopped by
+        // numerical trouble would meet it again from there (review 14:
+        // `--resume` repeated the same stop).
         let _ = std::fs::remove_file(d.join("checkpoint.json"));
     }
     let report = RunReport {

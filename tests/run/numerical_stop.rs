@@ -107,3 +107,37 @@ fn a_path_that_turns_back_below_its_start_says_so() {
     );
     assert!(note.contains(&format!("to lambda = {stop}")), "{note}");
 }
+
+/// A static run whose output grid point cannot be corrected stops like a
+/// step that cannot (reviews 14 and 16): summary.json with the diagnosis,
+/// exit 2, no checkpoint left to resume into the same stop. The clamped
+/// arch at solver.residual_tol = 1e-9 stalls at 4.3e-9 on its grid point
+/// lambda = 0.45 (it used to exit 1 with no summary.json). The message says
+/// that the residual stalled just above the tolerance.
+#[test]
+fn a_grid_point_that_cannot_be_corrected_is_a_numerical_stop() {
+    let dir = scratch("grid-point-stop");
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/verification");
+    let text = std::fs::read_to_string(src.join("clamped-arch-snap.toml")).unwrap();
+    let text = text.replace("[solver]\n", "[solver]\nresidual_tol = 1e-9\n");
+    assert!(text.contains("residual_tol = 1e-9"));
+    let scene = dir.path().join("arch.toml");
+    std::fs::write(&scene, text).unwrap();
+    let out = dir.path().join("out");
+    let run = Command::new(env!("CARGO_BIN_EXE_anm"))
+        .args(["run", "--quiet"])
+        .arg(&scene)
+        .arg("-o")
+        .arg(&out)
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&run.stdout);
+    println!("{stdout}{}", String::from_utf8_lossy(&run.stderr));
+    assert_eq!(run.status.code(), Some(2), "{run:?}");
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["stop"]["reason"], "no_convergence", "{summary}");
+    let message = summary["stop"]["message"].as_str().unwrap();
+    assert!(message.contains("solver.residual_tol"), "{message}");
+    assert!(!out.join("checkpoint.json").exists());
+}
