@@ -643,9 +643,16 @@ fn run_inner(
         }
         Method::Newton(ncfg) => {
             method_name = "newton";
-            let n_grid = (ncfg.lambda_end / scene.output.lambda_step).abs().round() as i64;
-            let d = rec.grid_step();
-            let grid: Vec<f64> = (1..=n_grid).map(|i| i as f64 * d).collect();
+            // The grid up to lambda_end, and lambda_end where it is off the
+            // grid (review 16: a lambda_step beyond lambda_end put a target
+            // past it, and the run followed the path there).
+            let mut grid = rec.grid_between(0.0, ncfg.lambda_end);
+            if grid
+                .last()
+                .is_none_or(|g| (g - ncfg.lambda_end).abs() > 1e-12)
+            {
+                grid.push(ncfg.lambda_end);
+            }
             let mut prev = (zero.clone(), 0.0);
             let mut count = 0usize;
             let mut inertia: Option<usize> = None;
@@ -727,8 +734,7 @@ fn run_inner(
                         events: vec![],
                         contact_switches,
                     })?;
-                    if grid.iter().any(|g| (g - lambda).abs() < 1e-12) {
-                        let g = (lambda / d).round() * d;
+                    if let Some(&g) = grid.iter().find(|g| (*g - lambda).abs() < 1e-12) {
                         let full = m.expand(u, lambda);
                         rec.record(
                             m,
@@ -880,8 +886,13 @@ fn run_inner(
         PathStop::MaxSteps { steps, lambda } => Some(format!(
             "solver.max_steps = {steps} reached at lambda = {lambda}"
         )),
-        PathStop::Interrupted { lambda } => Some(format!(
+        // Only the ANM writes a checkpoint (review 16: a Newton run was told
+        // to resume and had nothing to resume from).
+        PathStop::Interrupted { lambda } if method_name == "anm" => Some(format!(
             "interrupted (Ctrl-C or SIGTERM) at the step end lambda = {lambda}; continue with `anm run --resume DIR`"
+        )),
+        PathStop::Interrupted { lambda } => Some(format!(
+            "interrupted (Ctrl-C or SIGTERM) at the increment end lambda = {lambda}; a {method_name} run writes no checkpoint: run it again"
         )),
         PathStop::End { .. } => None,
     };

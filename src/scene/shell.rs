@@ -2326,10 +2326,21 @@ fn solver(c: &Checker, s: &RawSolver, size: f64) -> Result<(Method, Continuation
                 }
             };
             let initial_step = c.positive("solver.newton_step", s.newton_step.unwrap_or(0.01))?;
+            let max_step =
+                c.positive("solver.newton_max_step", s.newton_max_step.unwrap_or(0.1))?;
+            // Review 16: a first increment five times the cap was taken.
+            if initial_step > max_step {
+                return Err(c.fail(
+                    "solver.newton_step",
+                    format!(
+                        "the first increment {initial_step:e} exceeds solver.newton_max_step = {max_step:e}, the largest increment"
+                    ),
+                ));
+            }
             Method::Newton(NewtonConfig {
                 control,
                 initial_step,
-                max_step: c.positive("solver.newton_max_step", s.newton_max_step.unwrap_or(0.1))?,
+                max_step,
                 tol: c.positive("solver.newton_tol", s.newton_tol.unwrap_or(residual_tol))?,
                 lambda_end,
                 max_steps,

@@ -199,6 +199,22 @@ pub fn run<P: ContinuationProblem>(
             {
                 None
             }
+            // One whose chord is longer than the largest increment allowed
+            // (by more than JUMP) converged far from its predictor within
+            // the hyperplane: it has left the path for another branch
+            // (review 16: a cylindrical panel's increment of 1.2 for at
+            // most 1.0 went from lambda = 0.25 to −0.58, and the run ended
+            // on the other branch at lambda = 1, 31 % off, with exit 0). It
+            // is retried with half the increment. (Against the increment
+            // itself rather than its cap the test also refused the clamped
+            // arch's pass of its fold, a chord of 1.72 increments, and
+            // corrections within a loose tolerance's band at tiny steps.)
+            Ok((un, ln, _))
+                if control == Control::Arclength
+                    && chord(&un, ln, &u, lambda, &metric) > JUMP * cfg.max_step =>
+            {
+                None
+            }
             Ok(point) => Some(point),
             Err(e) if e.is_numerical() => None,
             Err(e) => return done(stats, Stop::Failed(e), u, lambda),
@@ -268,6 +284,17 @@ pub fn run<P: ContinuationProblem>(
     }
     let steps = cfg.max_steps;
     done(stats, Stop::MaxSteps { steps, lambda }, u, lambda)
+}
+
+/// Largest ratio of a converged arclength increment's chord to the largest
+/// increment allowed (`NewtonConfig::max_step`).
+const JUMP: f64 = 1.1;
+
+/// The chord from (u, lambda) to (un, ln) in the scaled metric.
+fn chord(un: &[f64], ln: f64, u: &[f64], lambda: f64, metric: &Metric) -> f64 {
+    let inc: Vec<f64> = un.iter().zip(u).map(|(a, b)| a - b).collect();
+    let dls = metric.l(ln - lambda);
+    (metric.dot_u(&inc, &inc) + dls * dls).sqrt()
 }
 
 /// Whether the increment from (u, lambda) to (un, ln) points against the

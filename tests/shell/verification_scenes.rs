@@ -341,3 +341,66 @@ fn clamped_arch_snap_through_records_every_crossing() {
     );
     assert!(c.points == 3 && c.max_residual <= 1e-6, "{c:?}");
 }
+
+/// Arclength Newton with large increments (up to 1, |R|/|F| ≤ 1e-4, the
+/// README's fastest Newton setting on plate-cylinder) on the hinged
+/// cylindrical panel (tests/data/hinged-panel-newton.toml, review 16): an
+/// increment whose chord exceeds the largest increment has left the path
+/// and is retried shorter. It used to be accepted (1.2 for 1.0, lambda
+/// 0.25 → −0.58), and the run ended at lambda = 1 on another branch, w_c
+/// 31 % off, with exit 0. Against the ANM on the same scene.
+#[test]
+fn arclength_newton_does_not_jump_to_another_branch_of_the_panel() {
+    let path = format!(
+        "{}/tests/data/hinged-panel-newton.toml",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    let newton = anm::scene::shell::load(std::path::Path::new(&path)).unwrap();
+    let text = std::fs::read_to_string(&path).unwrap();
+    let text = text
+        .replace("method = \"newton\"\n", "")
+        .replace("newton_max_step = 1.0\n", "")
+        .replace("newton_tol = 1e-4\n", "");
+    let dir = std::env::temp_dir().join("anm-hinged-panel-anm");
+    std::fs::create_dir_all(&dir).unwrap();
+    let anm_file = dir.join("panel.toml");
+    std::fs::write(&anm_file, text).unwrap();
+    let anm_scene = anm::scene::shell::load(&anm_file).unwrap();
+    let rn = run_loaded(&newton, None, false).unwrap();
+    let ra = run_loaded(&anm_scene, None, false).unwrap();
+    assert_eq!(rn.stop.reason, "end", "{:?}", rn.stop);
+    assert_eq!(ra.stop.reason, "end", "{:?}", ra.stop);
+    let w = |r: &RunReport| r.history.last().unwrap()[1];
+    println!("w_c(1): Newton {:.6}, ANM {:.6}", w(&rn), w(&ra));
+    assert_rel(w(&rn), w(&ra), 1e-4, "Newton's w_c(1) against the ANM's");
+}
+
+/// An output step beyond lambda_end (review 16): Newton writes the rows
+/// at 0 and lambda_end and stops there, as the ANM does. It used to take
+/// the grid's first value, 2, as a target past lambda_end = 1, followed the
+/// path there (the cantilever rolled twice) and stopped with a step
+/// collapse and no row at lambda = 1.
+#[test]
+fn newton_stops_at_lambda_end_when_the_output_step_is_longer() {
+    let src = format!(
+        "{}/scenes/verification/cantilever-moment.toml",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    let text = std::fs::read_to_string(&src)
+        .unwrap()
+        .replace(
+            "order = 20\neps = 1e-8\n",
+            "method = \"newton\"\nnewton_control = \"load\"\nnewton_max_step = 0.05\n",
+        )
+        .replace("lambda_step = 0.25", "lambda_step = 2.0");
+    assert!(text.contains("newton_max_step") && text.contains("lambda_step = 2.0"));
+    let dir = std::env::temp_dir().join("anm-newton-long-output-step");
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("cantilever.toml");
+    std::fs::write(&file, text).unwrap();
+    let r = run_loaded(&anm::scene::shell::load(&file).unwrap(), None, false).unwrap();
+    let lambdas: Vec<f64> = r.history.iter().map(|row| row[0]).collect();
+    println!("{:?}: rows at {lambdas:?}", r.stop);
+    assert_eq!(r.stop.reason, "end", "{:?}", r.stop);
+    assert_eq!(lambdas, [0.0, 1.0]);
+}
