@@ -1922,8 +1922,8 @@ fn axis_of(s: &str) -> Option<usize> {
 }
 
 /// A warning for each obstacle farther than `contact.search_distance` from
-/// every contact node at the start (it touches nothing unless it moves;
-/// with friction, the regularized law's faint pull leaves the shell free
+/// every contact node at the start (it touches nothing unless it moves or
+/// the shell deflects onto it; with friction, the regularized law's faint pull leaves the shell free
 /// and a run in time crawls: 5,102 steps to t = 5e-4 s of 1 s in a new
 /// user's scene with the roller 5 m away).
 fn out_of_reach(
@@ -1942,7 +1942,7 @@ fn out_of_reach(
                 .fold(f64::INFINITY, f64::min);
             (nearest > contact.search_distance).then(|| {
                 format!(
-                    "{}: obstacle `{}` is {nearest:.3e} from the nearest contact node, beyond contact.search_distance = {:.3e}: it touches nothing unless it moves",
+                    "{}: obstacle `{}` is {nearest:.3e} from the nearest contact node, beyond contact.search_distance = {:.3e}: it touches nothing unless it moves or the shell deflects that far toward it",
                     path.display(),
                     o.name,
                     contact.search_distance

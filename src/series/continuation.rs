@@ -84,6 +84,13 @@ pub trait ContinuationProblem {
     fn kinks(&self) -> bool {
         false
     }
+    /// A force per unit lambda that drives the path where dR/dlambda is
+    /// exactly zero (default: none): the residual test's scale there
+    /// ([`super::correct::force_scale`]). A shell pushed only by a moving
+    /// obstacle under the penalty law has no dR/dlambda before it touches.
+    fn drive_floor(&self) -> Option<Vec<f64>> {
+        None
+    }
     /// The unknowns that [`Self::events`] reads (default: all). The kink
     /// search evaluates only these on the step's series, dozens of times
     /// per step: events must not read any other entry of `u`.

@@ -328,7 +328,7 @@ pub fn correct_noting_start<P: ContinuationProblem + ?Sized>(
         stats.residual_evaluations += 1;
         charge(&mut stats.assembly_s, t);
         let scale = match &assembled {
-            Some((_, rl)) => metric.residual_norm(rl).max(f64::MIN_POSITIVE),
+            Some((_, rl)) => force_scale(&*problem, metric, rl),
             None => fixed_scale,
         };
         let res = metric.residual_norm(&r) / scale;
@@ -556,4 +556,25 @@ pub fn correct_at_lambda<P: ContinuationProblem + ?Sized>(
         stats,
     )?;
     Ok((c.u, c.iterations))
+}
+
+/// The scale of the relative residual test, |dR/dlambda| in the unit-free
+/// norm; where that is exactly zero, the problem's drive floor
+/// ([`ContinuationProblem::drive_floor`]) instead (review 15: a plate
+/// pushed by a moving plane under the penalty law divided its residual by
+/// the smallest positive number, 1.4e301, and stopped before the touch).
+pub fn force_scale<P: ContinuationProblem + ?Sized>(
+    problem: &P,
+    metric: &Metric,
+    rl: &[f64],
+) -> f64 {
+    let scale = metric.residual_norm(rl);
+    let scale = if scale == 0.0 {
+        problem
+            .drive_floor()
+            .map_or(0.0, |f| metric.residual_norm(&f))
+    } else {
+        scale
+    };
+    scale.max(f64::MIN_POSITIVE)
 }

@@ -575,7 +575,7 @@ pub(crate) fn series_step<P: ContinuationProblem + ?Sized>(
         step.length = a;
         stats.kink_cuts += 1;
     }
-    let scale = metric.residual_norm(&r_lambda).max(f64::MIN_POSITIVE);
+    let scale = super::correct::force_scale(&*problem, metric, &r_lambda);
     // An event within reach: cross it by a corrected jump (super::events).
     if cfg.events
         && let Some(crossing) = events::locate(problem, &step)?

@@ -42,7 +42,7 @@ use crate::contact::log_reaction::LogReaction;
 use crate::contact::obstacle::{GapSeries, Obstacle};
 use crate::contact::search::{self, ContactPair};
 use crate::error::{Error, Result};
-use crate::fe::dof::{Dof, PER_NODE, index as dof};
+use crate::fe::dof::{Component, Dof, PER_NODE, index as dof};
 use crate::fe::pattern::{ElementSlots, NO_SLOT, element_slots, node_block_structure};
 use crate::fe::prefetch::prefetch_growing;
 use crate::fe::surface_load;
@@ -1120,6 +1120,24 @@ impl ContinuationProblem for ShellModel {
     /// every step ends just past the first one (series::kinks).
     fn kinks(&self) -> bool {
         self.pairs.iter().any(|p| p.law.is_piecewise())
+    }
+
+    /// K times each translating obstacle's velocity on its candidates'
+    /// translations: the force per unit lambda that the motion exerts once
+    /// they touch, the scale of the residual test while nothing touches
+    /// under the penalty law (dR/dlambda = 0 there).
+    fn drive_floor(&self) -> Option<Vec<f64>> {
+        let mut full = vec![0.0; PER_NODE * self.x0.len()];
+        let mut any = false;
+        for p in &self.pairs {
+            if let Motion::Translate { velocity } = &self.motions[p.obstacle] {
+                for (c, comp) in Component::DISPLACEMENT.iter().enumerate() {
+                    full[Dof::new(p.node, *comp).index()] += p.law.k * velocity[c];
+                }
+                any = true;
+            }
+        }
+        any.then(|| self.reduce(&full))
     }
 
     /// With `contact_arclength` = c > 0: y = c ln(R + eta) of every active

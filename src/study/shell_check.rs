@@ -102,7 +102,7 @@ pub fn check(scene: &ShellScene, report: &RunReport) -> Result<ShellCheck> {
     let zero = vec![0.0; model.ndof()];
     let f_norm = {
         let (_, rl) = model.tangent(&zero, 0.0)?;
-        metric.residual_norm(&rl).max(f64::MIN_POSITIVE)
+        crate::series::correct::force_scale(&model, &metric, &rl)
     };
     let mut out = ShellCheck {
         max_residual: 0.0,

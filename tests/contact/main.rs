@@ -8,6 +8,7 @@ mod scratch;
 mod shell_common;
 
 mod event_spring;
+mod obstacle_driven;
 mod outside_the_group;
 mod plate_cylinder;
 mod propped_cantilever;
