@@ -430,6 +430,8 @@ fn run_inner(
             // The step before the current one: its end inertia is the
             // current step's start inertia (critical points, DESIGN §8).
             let mut pending: Option<PathStep> = None;
+            // Negative pivots of the tangent at the path's end, when factored.
+            let mut end_pivots: Option<Option<usize>> = None;
             let secondary = match scene.branch {
                 Branch::Secondary { direction } => Some(direction),
                 Branch::Primary => None,
@@ -543,6 +545,7 @@ fn run_inner(
                     // Found above.
                 } else if path_at_end(&step, &cfg) {
                     let n1 = step_end_inertia(model, &mut event_lu, &step)?;
+                    end_pivots = Some(n1);
                     events.extend(critical_points(
                         model,
                         &mut event_lu,
@@ -632,6 +635,7 @@ fn run_inner(
                     Some(_) => end_inertia(model, &mut event_lu, &u, l, prev.index)?,
                     None => None,
                 };
+                end_pivots = Some(n1);
                 for e in critical_points(model, &mut event_lu, &prev, n1, None, &locate)? {
                     record_event(&mut rec, model, e)?;
                 }
@@ -639,7 +643,13 @@ fn run_inner(
             let (u, l) = path.state();
             let ls = event_lu.stats();
             event_factorizations = ls.ldlt + ls.lblt + ls.lu + ls.mumps;
-            (stop, path.stats().clone(), (u.to_vec(), l))
+            let mut stats = path.stats().clone();
+            // The inertia at the path's end, where it was factored (review
+            // 14: the last step's start said 0 on a column past P_cr).
+            if let Some(n) = end_pivots {
+                stats.linear.negative_pivots = n;
+            }
+            (stop, stats, (u.to_vec(), l))
         }
         Method::Newton(ncfg) => {
             method_name = "newton";

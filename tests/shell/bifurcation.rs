@@ -81,6 +81,10 @@ fn euler_column_buckle_and_path_bifurcation_match_the_closed_form() {
     assert!((e.lambda - 1.0).abs() <= 5e-3, "{}", e.lambda);
     assert_eq!(e.negative_pivots, Some((0, 1)));
     assert!((e.wavelength.unwrap() / 40.0 - 1.0).abs() < 0.05);
+    // The path ends past P_cr: its end's tangent has one negative
+    // eigenvalue, which summary.json's stats.linear reports (review 14:
+    // it reported the last step's start, 0).
+    assert_eq!(r.stats.linear.negative_pivots, Some(1));
 
     // Location accuracy, independently of the locator: linearized buckling
     // (subspace iteration on the pencil) about the path state just before
