@@ -829,17 +829,34 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
             if let Some(increment) = locate {
                 use anm::study::critical_cost;
                 anm::reference::settings::positive("locate", increment)?;
-                let rows = [
-                    critical_cost::anm(&sc)?,
-                    critical_cost::newton_bisection(&sc, increment, 1e-6)?,
-                ];
-                let table = critical_cost::table(&scene.display().to_string(), &rows);
+                // The ANM's location is shown whatever the baseline's fate
+                // (review 14: a Newton failure hid it); a baseline that
+                // cannot locate the point is a numerical stop (exit 2).
+                let mut rows = vec![critical_cost::anm(&sc)?];
+                let baseline = critical_cost::newton_bisection(&sc, increment, 1e-6);
+                let failed = match baseline {
+                    Ok(row) => {
+                        rows.push(row);
+                        None
+                    }
+                    Err(e @ anm::Error::Study { .. }) => Some(e.to_string()),
+                    Err(e) => return Err(e.into()),
+                };
+                let mut table = critical_cost::table(&scene.display().to_string(), &rows);
+                if let Some(why) = &failed {
+                    table += &format!(
+                        "| Newton, increments {increment}, bisection on the negative pivots | not located | – | – | – |\n\n{why}\n"
+                    );
+                }
                 print!("{table}");
                 if let Some(d) = out {
                     std::fs::create_dir_all(&d)?;
                     std::fs::write(d.join("critical.md"), &table)?;
                 }
-                return Ok(ExitCode::SUCCESS);
+                return Ok(match failed {
+                    None => ExitCode::SUCCESS,
+                    Some(_) => ExitCode::from(2),
+                });
             }
             use anm::study::buckle::Base;
             let base = time.map_or(Base::Lambda(lambda), Base::Time);

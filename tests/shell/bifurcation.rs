@@ -719,3 +719,32 @@ fn an_arch_s_primary_path_stays_symmetric_through_its_bifurcations() {
     assert_eq!(lim.len(), 2, "{lim:?}");
     assert!(near(&lim, 1.2062) && near(&lim, -0.5882), "{lim:?}");
 }
+
+/// `anm buckle --locate` on a limit point (review 14): load-controlled
+/// Newton cannot pass it, and says so with the increment that brackets it
+/// (exit 2), beside the ANM's location. It used to fail with a bare "no
+/// convergence" or to report "no critical point up to lambda_end" (an
+/// increment that jumped onto the snapped branch), hiding the ANM's row.
+#[test]
+fn locate_says_that_load_control_cannot_pass_a_limit_point() {
+    let scene = format!(
+        "{}/scenes/verification/clamped-arch-snap.toml",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_anm"))
+        .args(["buckle", &scene, "--locate", "0.1"])
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    println!("{text}");
+    assert_eq!(out.status.code(), Some(2), "{out:?}");
+    let anm_row = text
+        .lines()
+        .find(|l| l.starts_with("| ANM"))
+        .expect("the ANM's row");
+    let located: f64 = anm_row.split('|').nth(2).unwrap().trim().parse().unwrap();
+    // The arch's limit point (arch_limit_points_are_told_apart_...).
+    assert!((located - 0.5016).abs() < 1e-3, "{located}");
+    assert!(text.contains("a limit point lies between them"), "{text}");
+    assert!(text.contains("lambda = 0.500000 to 0.600000"), "{text}");
+}
