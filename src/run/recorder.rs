@@ -163,6 +163,10 @@ pub struct RecorderState {
     /// lambda_end's sign (a path that turned back, run::shell).
     #[serde(default)]
     pub reach: f64,
+    /// The first step's largest translation per unit of lambda_end, in
+    /// model sizes, and its lambda (a mechanism at the start, run::shell).
+    #[serde(default)]
+    pub first_rate: Option<(f64, f64)>,
 }
 
 /// Which side of its law's switch each contact pair is on, with

@@ -561,6 +561,15 @@ fn run_inner(
                     .into_iter()
                     .map(|e| record_event(&mut rec, model, e))
                     .collect::<Result<_>>()?;
+                if step.index == 0 && step.lambda_end != 0.0 {
+                    let full = model.expand(&step.u_end, step.lambda_end);
+                    let moved = (0..model.x0.len())
+                        .map(|n| (model.position(&full, n) - model.x0[n]).norm())
+                        .fold(0.0, f64::max);
+                    let rate =
+                        moved / model.length_scale * (cfg.lambda_end / step.lambda_end).abs();
+                    rec.state.first_rate = Some((rate, step.lambda_end));
+                }
                 let g = model.events(&step.u_end, step.lambda_end)?;
                 rec.state.reach = rec
                     .state
@@ -988,6 +997,16 @@ fn run_inner(
                 cfg.lambda_end,
             ));
             notes.extend(without_inertia(stats.linear.symmetric_without_inertia));
+            // Review 15: a free plate held only by penalty-law candidates
+            // (eta = 0: no force before they touch) fell through its gap
+            // at lambda = 4e-13 and rocked, reporting two "bifurcations".
+            if let Some((rate, l1)) = rec.state.first_rate
+                && rate > MECHANISM
+            {
+                notes.push(format!(
+                    "the first step moved the shell {rate:.1e} times the model's size per unit of lambda_end (to lambda = {l1:.3e}): at lambda = 0 it is not held (a mechanism, e.g. a shell held only by contact candidates, which the penalty law, contact.eta = 0, leaves free until they touch); what the path does at such loads, events included, is that rigid motion settling; hold the shell or use contact.eta > 0"
+                ));
+            }
             // Review 15: every step of a strip on a plane was accepted at the
             // floor (1.2e-5 against 1e-6) with only summary.json saying so.
             if stats.round_off_stops > 0 {
@@ -1128,6 +1147,10 @@ fn path_at_end(step: &PathStep, cfg: &crate::series::ContinuationConfig) -> bool
 }
 
 /// [`end_inertia`] at the end of `step`, when its start tangent had an
+/// Largest translation of the first step per unit of lambda_end, in model
+/// sizes, above which the shell is taken as not held at the start.
+const MECHANISM: f64 = 1e6;
+
 /// inertia (None otherwise).
 fn step_end_inertia(
     model: &mut ShellModel,

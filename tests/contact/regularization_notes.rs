@@ -75,3 +75,25 @@ fn an_eta_beyond_k_delta_is_refused_by_name() {
         "{e}"
     );
 }
+
+/// A free plate held only by penalty-law candidates (eta = 0: no force
+/// before they touch) under a pressure (tests/data/free-plate-on-plane.toml,
+/// review 15): the first step falls through the 1e-3 m gap at lambda =
+/// 4e-13 and the plate rocks as its nodes touch, which the run reported as
+/// two bifurcations with wavelengths of 4e10 m. The end state is right
+/// (the plane carries p A = 100 N), and a note now says that the shell was
+/// not held at the start.
+#[test]
+fn a_shell_not_held_before_contact_is_noted() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data/free-plate-on-plane.toml");
+    let r = run_loaded(&load(&path).unwrap(), None, false).unwrap();
+    assert_eq!(r.stop.reason, "end", "{:?}", r.stop);
+    println!("{:?}", r.notes);
+    assert!((r.end["R"] - 100.0).abs() <= 1e-3 * 100.0, "{}", r.end["R"]);
+    assert!(
+        r.notes.iter().any(|n| n.contains("it is not held")),
+        "{:?}",
+        r.notes
+    );
+}
