@@ -130,6 +130,9 @@ pub fn run<P: ContinuationProblem>(
     };
     // Attempts, accepted or halved; errors name the step by the accepted
     // steps before it (as the ANM path and summary.json's `steps` count).
+    // The last correction that failed numerically since the last accepted
+    // increment.
+    let mut last_failure: Option<Error> = None;
     for _attempt in 0..cfg.max_steps {
         if pending.is_empty() {
             return done(stats, Stop::End { lambda }, u, lambda);
@@ -216,7 +219,10 @@ pub fn run<P: ContinuationProblem>(
                 None
             }
             Ok(point) => Some(point),
-            Err(e) if e.is_numerical() => None,
+            Err(e) if e.is_numerical() => {
+                last_failure = Some(e);
+                None
+            }
             Err(e) => return done(stats, Stop::Failed(e), u, lambda),
         };
         // An arclength corrector may pass the next target: that target is
@@ -241,7 +247,10 @@ pub fn run<P: ContinuationProblem>(
                     index,
                 ) {
                     Ok((ut, lt, it)) => Some((ut, lt, iterations + it)),
-                    Err(e) if e.is_numerical() => None,
+                    Err(e) if e.is_numerical() => {
+                        last_failure = Some(e);
+                        None
+                    }
                     Err(e) => return done(stats, Stop::Failed(e), u, lambda),
                 }
             }
@@ -260,6 +269,7 @@ pub fn run<P: ContinuationProblem>(
                 }
                 u = un;
                 lambda = ln;
+                last_failure = None;
                 if hit_target {
                     pending.remove(0);
                 }
@@ -273,12 +283,15 @@ pub fn run<P: ContinuationProblem>(
             None => step *= 0.5,
         }
         if step < cfg.min_step {
-            let collapse = Error::StepCollapse {
+            // The last failed correction says why (review 16: "step length
+            // collapsed" 11–16 % below the arch's limit point, where the
+            // corrections stalled at 4.8e-9 against a tolerance of 1e-9).
+            let collapse = last_failure.take().unwrap_or(Error::StepCollapse {
                 step: index,
                 param: "lambda",
                 at: lambda,
                 length: step,
-            };
+            });
             return done(stats, Stop::Failed(collapse), u, lambda);
         }
     }
