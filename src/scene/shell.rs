@@ -2292,6 +2292,10 @@ fn solver(c: &Checker, s: &RawSolver, size: f64) -> Result<(Method, Continuation
         ("solver.eps", s.eps.is_some()),
         ("solver.pade", s.pade.is_some()),
         ("solver.contact_arclength", s.contact_arclength.is_some()),
+        // The ANM's step-end and grid corrections (review 16: accepted and
+        // ignored by Newton, whose increments iterate to newton_tol).
+        ("solver.correct", s.correct.is_some()),
+        ("solver.max_corrections", s.max_corrections.is_some()),
     ];
     let method_name = s.method.as_deref().unwrap_or("anm");
     let refuse = |keys: &[(&str, bool)]| -> Result<()> {

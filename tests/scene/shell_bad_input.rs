@@ -871,3 +871,21 @@ lambda_step = 0.5
         "{w}"
     );
 }
+
+/// The ANM's correction keys with the Newton baseline (review 16: accepted
+/// and ignored, 436 increments whatever max_corrections said).
+#[test]
+fn anm_correction_keys_are_refused_with_newton() {
+    let s = scene(
+        "newton-corrections.toml",
+        &mesh_path(),
+        &[
+            ("order = 15\neps = 1e-8", "method = \"newton\""),
+            ("pade = true\n", ""),
+        ],
+    );
+    expect_err(
+        load(&s),
+        &["solver.correct", "not used by solver.method = \"newton\""],
+    );
+}
