@@ -713,7 +713,7 @@ fn run_inner(
                         && a != b
                     {
                         brackets.push(format!(
-                            "negative pivots {a} -> {b} between lambda = {:.6e} and {lambda:.6e}: a critical point the Newton steps bracket but do not locate (solver.method = \"anm\" or `anm buckle` locates it)",
+                            "negative pivots {a} -> {b} between the increment ends at lambda = {:.6e} and {lambda:.6e}: a critical point the Newton steps bracket along the path but do not locate (a limit point's lambda can lie beyond both ends; solver.method = \"anm\" or `anm buckle` locates it)",
                             prev.1
                         ));
                     }
@@ -722,7 +722,7 @@ fn run_inner(
                         chord(m, &du, 0.0, ncfg.lambda_end.abs()) / dl.abs().max(f64::MIN_POSITIVE);
                     if load_control
                         && let Some(r) = last_rate
-                        && rate > 10.0 * r
+                        && rate > crate::study::critical_cost::SNAP * r
                     {
                         brackets.push(format!(
                             "between lambda = {:.6e} and {lambda:.6e} the displacements moved {:.0} times faster per unit load than in the increment before: a jump, as past a limit point under load control; the path between is not followed (solver.newton_control = \"arclength\" or the ANM follows it)",

@@ -220,6 +220,7 @@ fn the_penalty_law_follows_the_small_eta_limit_in_a_quarter_of_the_steps() {
                 "method = \"newton\"\nnewton_step = 0.001\nnewton_max_step = 0.005\nnewton_tol = 1e-7",
             ),
             ("pade = true\n", ""),
+            ("correct = true\nmax_corrections = 10\n", ""),
             ("residual_tol = 1e-6", "residual_tol = 1e-7"),
         ],
     );
@@ -236,6 +237,7 @@ fn the_penalty_law_follows_the_small_eta_limit_in_a_quarter_of_the_steps() {
                 "method = \"newton\"\nnewton_step = 0.001\nnewton_max_step = 0.005\nnewton_tol = 1e-7\nnewton_line_search = true",
             ),
             ("pade = true\n", ""),
+            ("correct = true\nmax_corrections = 10\n", ""),
             ("residual_tol = 1e-6", "residual_tol = 1e-7"),
         ],
     );

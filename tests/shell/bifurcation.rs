@@ -514,7 +514,7 @@ fn newton_runs_name_the_critical_points_their_steps_bracket() {
     let note = &r.notes[0];
     assert!(note.contains("negative pivots 0 -> 1"), "{note}");
     let words: Vec<&str> = note
-        .split("between lambda = ")
+        .split("increment ends at lambda = ")
         .nth(1)
         .unwrap()
         .split_whitespace()
