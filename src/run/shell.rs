@@ -902,6 +902,11 @@ fn run_inner(
     }
     let message = match &stop {
         PathStop::Failed(e) => Some(e.to_string()),
+        // Newton counts every increment it tries, the cut ones too (review
+        // 16: "0 steps" and max_steps reached).
+        PathStop::MaxSteps { steps, lambda } if method_name == "newton" => Some(format!(
+            "solver.max_steps = {steps} increments tried (accepted and cut) at lambda = {lambda}"
+        )),
         PathStop::MaxSteps { steps, lambda } => Some(format!(
             "solver.max_steps = {steps} reached at lambda = {lambda}"
         )),
