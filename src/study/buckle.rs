@@ -353,6 +353,9 @@ pub fn buckle(
         warnings: vec![],
     };
     report.warnings = opposite_pairs(&report.modes);
+    report
+        .warnings
+        .extend(reversed_loads(&report.modes, report.lambda_base));
     if let Some(d) = out_dir {
         crate::output::write_json(&d.join("buckle.json"), &report)?;
         let rows: Vec<Vec<f64>> = report
@@ -404,6 +407,25 @@ fn opposite_pairs(modes: &[Mode]) -> Vec<String> {
         }
     }
     w
+}
+
+/// A warning for modes with mu < 0 (review 14: a lambda_critical of 0.2246
+/// below a base state of 0.9 that the path passed stable): their critical
+/// load needs the load reversed from the base state. With it, that a
+/// linearized analysis does not see limit points.
+fn reversed_loads(modes: &[Mode], base: f64) -> Vec<String> {
+    let negative: Vec<String> = modes
+        .iter()
+        .filter(|m| m.mu < 0.0)
+        .map(|m| m.index.to_string())
+        .collect();
+    if negative.is_empty() {
+        return vec![];
+    }
+    vec![format!(
+        "mode(s) {} have mu < 0: their lambda_critical lies below the base state lambda = {base}, reached by unloading from it, not by loading on; and a linearized buckling analysis predicts bifurcations only, not limit points (locate those on the path with `anm run`)",
+        negative.join(", ")
+    )]
 }
 
 /// The eigenvalue table printed by `anm buckle`.

@@ -748,3 +748,32 @@ fn locate_says_that_load_control_cannot_pass_a_limit_point() {
     assert!(text.contains("a limit point lies between them"), "{text}");
     assert!(text.contains("lambda = 0.500000 to 0.600000"), "{text}");
 }
+
+/// `anm buckle` about a loaded state warns of modes with mu < 0 (review
+/// 14: a "lambda_critical" of 0.2246 below a base state of 0.9 that the
+/// path passed stable, without a word): the clamped arch about lambda =
+/// 0.45 has one among its first four.
+#[test]
+fn buckle_warns_of_negative_mu() {
+    let sc = scene("clamped-arch-snap");
+    let b = buckle(&sc, Base::Lambda(0.45), 4, None).expect("buckle");
+    print!("{}", anm::study::buckle::table(&b));
+    let negative: Vec<usize> = b
+        .modes
+        .iter()
+        .filter(|m| m.mu < 0.0)
+        .map(|m| m.index)
+        .collect();
+    assert!(
+        !negative.is_empty(),
+        "no mu < 0 here any more: {:?}",
+        b.modes
+    );
+    assert!(
+        b.warnings
+            .iter()
+            .any(|w| w.contains("mu < 0") && w.contains(&negative[0].to_string())),
+        "{:?}",
+        b.warnings
+    );
+}
