@@ -11,6 +11,22 @@ use crate::scratch::scratch;
 use std::path::Path;
 use std::process::Command;
 
+/// `anm run --quiet` on the scene `text` written as `dir/name`: its output
+/// folder and the process's output.
+fn run_text(dir: &Path, name: &str, text: &str) -> (std::path::PathBuf, std::process::Output) {
+    let scene = dir.join(name);
+    std::fs::write(&scene, text).unwrap();
+    let out = dir.join("out");
+    let run = Command::new(env!("CARGO_BIN_EXE_anm"))
+        .args(["run", "--quiet"])
+        .arg(&scene)
+        .arg("-o")
+        .arg(&out)
+        .output()
+        .unwrap();
+    (out, run)
+}
+
 #[test]
 fn a_run_in_time_stopped_by_numerical_trouble_writes_its_outputs() {
     let dir = scratch("numerical-stop");
@@ -20,16 +36,7 @@ fn a_run_in_time_stopped_by_numerical_trouble_writes_its_outputs() {
     .unwrap();
     let text = text.replace("divisions = [1, 64]", "divisions = [1, 16]");
     assert!(text.contains("divisions = [1, 16]"));
-    let scene = dir.path().join("breakaway.toml");
-    std::fs::write(&scene, text).unwrap();
-    let out = dir.path().join("out");
-    let run = Command::new(env!("CARGO_BIN_EXE_anm"))
-        .args(["run", "--quiet"])
-        .arg(&scene)
-        .arg("-o")
-        .arg(&out)
-        .output()
-        .unwrap();
+    let (out, run) = run_text(dir.path(), "breakaway.toml", &text);
     let stdout = String::from_utf8_lossy(&run.stdout);
     println!("{stdout}");
     assert_eq!(run.status.code(), Some(2), "{run:?}");
@@ -121,16 +128,7 @@ fn a_grid_point_that_cannot_be_corrected_is_a_numerical_stop() {
     let text = std::fs::read_to_string(src.join("clamped-arch-snap.toml")).unwrap();
     let text = text.replace("[solver]\n", "[solver]\nresidual_tol = 1e-9\n");
     assert!(text.contains("residual_tol = 1e-9"));
-    let scene = dir.path().join("arch.toml");
-    std::fs::write(&scene, text).unwrap();
-    let out = dir.path().join("out");
-    let run = Command::new(env!("CARGO_BIN_EXE_anm"))
-        .args(["run", "--quiet"])
-        .arg(&scene)
-        .arg("-o")
-        .arg(&out)
-        .output()
-        .unwrap();
+    let (out, run) = run_text(dir.path(), "arch.toml", &text);
     let stdout = String::from_utf8_lossy(&run.stdout);
     println!("{stdout}{}", String::from_utf8_lossy(&run.stderr));
     assert_eq!(run.status.code(), Some(2), "{run:?}");
