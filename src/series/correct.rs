@@ -420,7 +420,15 @@ pub fn correct_noting_start<P: ContinuationProblem + ?Sized>(
         // on would only add noise (a cantilever under a 1e-3 N tip load:
         // |R| 1.1–1.3e-8 N from iteration 1 on, updates ≤ 5 ε |x|).
         let dl_below = dl.abs() <= ROUND_OFF * l.abs().max(metric.lambda_scale());
-        if it > 0 && res > STALL * prev_res && dl_below && below_round_off(problem, &u, l, &du) {
+        // Or it stalls no higher than the floor the run has already
+        // accepted (review 15: on the penalty law an update across a kink
+        // is no round-off update, and a cantilever stopped at 1.6e-5 after
+        // accepting 3.2e-5 at its floor).
+        let at_floor = res <= stats.round_off_residual;
+        if it > 0
+            && res > STALL * prev_res
+            && (at_floor || (dl_below && below_round_off(problem, &u, l, &du)))
+        {
             stats.round_off_stops += 1;
             stats.round_off_residual = stats.round_off_residual.max(res);
             return Ok(Corrected {
