@@ -76,9 +76,7 @@ pub fn sink_note(
             Some((-obstacles[p.obstacle].distance(&x)?, p))
         })
         .max_by(|a, b| a.0.total_cmp(&b.0))?;
-    let moved = (0..model.x0.len())
-        .map(|n| (model.position(full, n) - model.x0[n]).norm())
-        .fold(0.0, f64::max);
+    let moved = model.largest_translation(full);
     let of_size = depth > SINK * model.length_scale;
     let of_motion = depth > SINK_SHARE * moved && depth > 1e-6 * model.length_scale;
     (of_size || of_motion).then(|| {

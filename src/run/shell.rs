@@ -563,9 +563,7 @@ fn run_inner(
                     .collect::<Result<_>>()?;
                 if step.index == 0 && step.lambda_end != 0.0 {
                     let full = model.expand(&step.u_end, step.lambda_end);
-                    let moved = (0..model.x0.len())
-                        .map(|n| (model.position(&full, n) - model.x0[n]).norm())
-                        .fold(0.0, f64::max);
+                    let moved = model.largest_translation(&full);
                     let rate =
                         moved / model.length_scale * (cfg.lambda_end / step.lambda_end).abs();
                     rec.state.first_rate = Some((rate, step.lambda_end));
@@ -1151,11 +1149,11 @@ fn path_at_end(step: &PathStep, cfg: &crate::series::ContinuationConfig) -> bool
     (step.lambda_end - cfg.lambda_end) * forward >= -1e-14 * cfg.lambda_end.abs().max(1.0)
 }
 
-/// [`end_inertia`] at the end of `step`, when its start tangent had an
 /// Largest translation of the first step per unit of lambda_end, in model
 /// sizes, above which the shell is taken as not held at the start.
 const MECHANISM: f64 = 1e6;
 
+/// [`end_inertia`] at the end of `step`, when its start tangent had an
 /// inertia (None otherwise).
 fn step_end_inertia(
     model: &mut ShellModel,

@@ -289,12 +289,12 @@ const EARLY_KINK_ORDERS: [usize; 3] = [3, 6, 10];
 /// kinks; with the smaller one: 168, and 1,099 solves instead of 2,979).
 const EARLY_KINK_REACH: f64 = 0.25;
 
-/// The scaled terms T̃_p = (Ũ_p, λ̃_p, y_p) of orders 0..=p, each written
 /// Largest share of the load in a geometric part (scaled |lambda_N| over
 /// |T_N|) for which the part is taken as a bifurcated branch and removed
 /// from the step ([`series_step`]).
 const OFF_BRANCH_LOAD_SHARE: f64 = 1e-3;
 
+/// The scaled terms T̃_p = (Ũ_p, λ̃_p, y_p) of orders 0..=p, each written
 /// once into its own buffer, the orders on every thread.
 fn stacked(metric: &Metric, us: &[Vec<f64>], ls: &[f64], ys: &[Vec<f64>]) -> Vec<Vec<f64>> {
     us.par_iter()
@@ -476,7 +476,7 @@ pub(crate) fn series_step<P: ContinuationProblem + ?Sized>(
         });
     }
     // Truncated before a kink, the step ends there: no tail to test.
-    let geometric = if early_kink.is_some() {
+    let mut geometric = if early_kink.is_some() {
         None
     } else {
         geometric::detect(&terms)
@@ -495,13 +495,8 @@ pub(crate) fn series_step<P: ContinuationProblem + ?Sized>(
     // load share 0.99 of the part on the spring of tests/contact; 1.5e-10
     // to 2.2e-6 on the arch's bifurcations) and is kept.
     let mut singular_mode = vec![];
-    let mut geometric = geometric;
-    let off_branch = geometric.is_some_and(|_| {
-        let tn = &terms[n_ord];
-        metric.l(ls[n_ord]).abs() <= OFF_BRANCH_LOAD_SHARE * norm(tn)
-    });
     let terms = match geometric.as_mut() {
-        Some(g) if off_branch => {
+        Some(g) if metric.l(ls[n_ord]).abs() <= OFF_BRANCH_LOAD_SHARE * norm(&terms[n_ord]) => {
             let un = us.pop().expect("order N");
             let ln = ls.pop().expect("order N");
             let yn = ys.pop().expect("order N");

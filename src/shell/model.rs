@@ -389,6 +389,13 @@ impl ShellModel {
         self.x0[node] + Self::vec3(full, node, 0)
     }
 
+    /// The largest translation |x − X| of a node from a full vector.
+    pub fn largest_translation(&self, full: &[f64]) -> f64 {
+        (0..self.n_nodes())
+            .map(|i| Self::vec3(full, i, 0).norm())
+            .fold(0.0, f64::max)
+    }
+
     /// Current directors from a full vector.
     pub fn directors(&self, full: &[f64]) -> Vec<Vec3> {
         (0..self.n_nodes())

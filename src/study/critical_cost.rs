@@ -135,13 +135,10 @@ pub fn newton_bisection(scene: &ShellScene, increment: f64, tol: f64) -> Result<
         };
     // Increments until the indicator changes. Load control cannot pass a
     // limit point: an increment that does not converge, or that converges
-    // with its displacements moving JUMP times faster than the increment
+    // with its displacements moving SNAP times faster than the increment
     // before (onto the far side of a snap), has one between its ends,
     // where the count of negative pivots need not differ (review 14: "no
-    // critical point" on an arch with a limit point at 0.9986). Measured:
-    // the snaps 5.1 (clamped arch, increments 0.1) and 25 times faster
-    // (pinned arch, 0.03); approaching the limit, 2.6 times at most.
-    const JUMP: f64 = SNAP;
+    // critical point" on an arch with a limit point at 0.9986).
     let passed = |a: f64, b: f64, what: String| {
         Error::study(
             "locate",
@@ -168,7 +165,7 @@ pub fn newton_bisection(scene: &ShellScene, increment: f64, tol: f64) -> Result<
         let du: Vec<f64> = ub.iter().zip(&ua).map(|(x, y)| x - y).collect();
         let rate = metric.dot_u(&du, &du).sqrt() / (b - a);
         if let Some(r) = last_rate
-            && rate > JUMP * r
+            && rate > SNAP * r
         {
             return Err(passed(
                 a,
