@@ -249,7 +249,10 @@ struct ItemArgs {
 #[derive(Subcommand)]
 enum ReferenceSolver {
     /// SUNDIALS IDA on a friction scene's DAE: writes history.csv, steps.csv,
-    /// summary.json and steps.svg into DIR.
+    /// summary.json and steps.svg into DIR. On a shell scene with
+    /// [friction]: the residual `anm run` integrates, from the same start,
+    /// with its history.csv columns, friction.csv, friction.svg and
+    /// summary.json (dense linear algebra: up to 2,500 unknowns).
     #[cfg(feature = "reference")]
     Ida {
         scene: PathBuf,
@@ -272,9 +275,10 @@ enum ReferenceSolver {
         #[arg(long, default_value = "product")]
         friction_row: String,
         /// Newton iterations per step attempt (IDASetMaxNonlinIters; IDA's
-        /// own default is 4).
-        #[arg(long, default_value_t = anm::reference::ida_run::MAX_NONLIN_ITERS)]
-        max_nonlin_iters: usize,
+        /// own default is 4) [default: 20 on a point-mass scene, 10 on a
+        /// shell scene].
+        #[arg(long)]
+        max_nonlin_iters: Option<usize>,
     },
     /// diffsol (pure Rust, BDF or ESDIRK34, singular mass matrix) on a
     /// friction scene's DAE: the same outputs as `anm reference ida`.
@@ -363,6 +367,47 @@ fn reference_report(
         "end" => ExitCode::SUCCESS,
         _ => ExitCode::from(2),
     })
+}
+
+/// Prints `anm reference ida`'s summary line on a shell scene; exit code 2
+/// when IDA did not reach t_end.
+#[cfg(feature = "reference")]
+fn shell_reference_summary(
+    r: &anm::run::shell_reference::ShellReferenceReport,
+    out: &std::path::Path,
+) -> ExitCode {
+    let c = &r.counters;
+    println!(
+        "{}: {} {} ({}, rtol {:e}, atol {:e}): stop = {} at t = {:.9} s; {} unknowns ({} friction nodes); {} steps, {} error-test failures, {} convergence failures, {} residual evals, {} Jacobian evals, {} factorizations, {:.3} s; outputs in {}",
+        r.scene,
+        r.tool,
+        r.version,
+        r.method,
+        r.rtol,
+        r.atol,
+        r.stop.reason,
+        r.stop.t,
+        r.unknowns,
+        r.friction_nodes,
+        c.steps,
+        c.error_test_failures,
+        c.convergence_failures,
+        c.residual_evaluations,
+        c.jacobian_evaluations,
+        c.factorizations,
+        r.wall_s,
+        out.display()
+    );
+    if let Some(m) = &r.stop.message {
+        println!("  {m}");
+    }
+    for n in &r.notes {
+        println!("note: {n}");
+    }
+    match r.stop.reason.as_str() {
+        "end" => ExitCode::SUCCESS,
+        _ => ExitCode::from(2),
+    }
 }
 
 /// The error and its causes, each once: our errors already print their
@@ -520,13 +565,38 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
                 },
         } => {
             use anm::reference::settings::{AlgebraicControl, Tolerances};
+            if let (Kind::Shell, _) = load(&scene)? {
+                // The shell's DAE has its own form: its law rows are
+                // `anm run`'s, its algebraic unknowns out of the test.
+                for (flag, value, default) in [
+                    ("--atol-algebraic", atol_algebraic.as_str(), "suppress"),
+                    ("--friction-row", friction_row.as_str(), "product"),
+                ] {
+                    if value != default {
+                        anyhow::bail!(
+                            "{flag} {value}: applies to the point-mass friction scenes; on a shell scene IDA integrates `anm run`'s residual with its algebraic unknowns out of the error test"
+                        );
+                    }
+                }
+                let sc = anm::scene::shell::load(&scene)?;
+                fresh_output(&out)?;
+                let settings = anm::run::shell_reference::ShellIdaSettings {
+                    rtol,
+                    atol,
+                    max_nonlin_iters: max_nonlin_iters
+                        .unwrap_or(anm::run::shell_reference::MAX_NONLIN_ITERS),
+                };
+                let r = anm::run::shell_reference::ida(&sc, &settings, &out)?;
+                return Ok(shell_reference_summary(&r, &out));
+            }
             let settings = anm::reference::IdaSettings {
                 tol: Tolerances::new(rtol, atol)?,
                 algebraic: AlgebraicControl::parse("atol-algebraic", &atol_algebraic)?,
                 friction_row: friction_row
                     .parse()
                     .map_err(|e: String| anyhow::anyhow!("--friction-row: {e}"))?,
-                max_nonlin_iters,
+                max_nonlin_iters: max_nonlin_iters
+                    .unwrap_or(anm::reference::ida_run::MAX_NONLIN_ITERS),
             };
             let sc = reference_scene(&scene, "IDA")?;
             // An earlier run's files would stand beside this one's (review

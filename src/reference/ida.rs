@@ -40,6 +40,23 @@ pub struct Counters {
     pub ls_residual_evals: i64,
 }
 
+impl Counters {
+    /// Under the names every time run shares (`summary.json` `counters`,
+    /// [`super::counters`]).
+    pub fn common(&self) -> super::counters::Counters {
+        super::counters::Counters {
+            steps: self.steps as u64,
+            residual_evaluations: (self.residual_evals + self.ls_residual_evals) as u64,
+            jacobian_evaluations: self.jacobian_evals as u64,
+            factorizations: self.linear_setups as u64,
+            linear_solves: self.nonlinear_iters as u64,
+            nonlinear_iterations: self.nonlinear_iters as u64,
+            error_test_failures: self.error_test_fails as u64,
+            convergence_failures: self.nonlinear_conv_fails as u64,
+        }
+    }
+}
+
 /// Data the C callbacks reach through IDA's user_data pointer.
 struct Callback<'a> {
     dae: &'a dyn Dae,

@@ -128,17 +128,7 @@ impl Stepper for IdaStepper<'_> {
         Some(e)
     }
     fn counters(&self) -> Counters {
-        let c = self.ida.counters();
-        Counters {
-            steps: c.steps as u64,
-            residual_evaluations: (c.residual_evals + c.ls_residual_evals) as u64,
-            jacobian_evaluations: c.jacobian_evals as u64,
-            factorizations: c.linear_setups as u64,
-            linear_solves: c.nonlinear_iters as u64,
-            nonlinear_iterations: c.nonlinear_iters as u64,
-            error_test_failures: c.error_test_fails as u64,
-            convergence_failures: c.nonlinear_conv_fails as u64,
-        }
+        self.ida.counters().common()
     }
 }
 

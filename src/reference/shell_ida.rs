@@ -15,12 +15,20 @@
 //! Dense linear algebra: for coarse scenes only (a few hundred unknowns).
 //! The friction pairs are those active at t = 0 (the scene's
 //! `contact.search_distance` must cover every candidate for the whole run).
+//! `anm reference ida` on a shell scene with `[friction]` runs it
+//! ([`crate::run::shell_reference`]).
 
+use super::counters::Counters;
 use super::dae::{Dae, Dense};
 use super::error::IdaError;
 use super::ida::{Ida, Task};
 use crate::shell::friction_dae::{FrictionDae, TimeState};
-use std::cell::RefCell;
+use std::cell::{Ref, RefCell};
+
+/// Largest system the dense linear algebra is offered: one factorization
+/// costs (2/3) n³ flops, about 2 s at n = 2,500 on a laptop core, and IDA
+/// refactors every few steps.
+pub const MAX_UNKNOWNS: usize = 2_500;
 
 /// The shell DAE in IDA's form.
 pub struct ShellIda {
@@ -32,6 +40,8 @@ pub struct ShellIda {
     n_model_pairs: usize,
     /// IDASetMaxNonlinIters, when set (IDA's default is 4).
     max_nonlin_iters: Option<i32>,
+    /// The consistent state IDA starts from (y' = 0: at rest).
+    start: Vec<f64>,
 }
 
 /// IDA's solution at the output times.
@@ -44,22 +54,35 @@ pub struct ShellIdaRun {
     pub error_test_fails: i64,
     pub nonlinear_conv_fails: i64,
     pub wall_s: f64,
+    /// The DAE's state at each output time (aligned with `samples`).
+    pub states: Vec<TimeState>,
+    /// IDA's counters under the common names (`summary.json`).
+    pub counters: Counters,
+    /// The failure that ended the integration before the last output time
+    /// ([`ShellIda::solve_keeping`]; `solve` returns it as its error).
+    pub stop: Option<IdaError>,
 }
 
 impl ShellIda {
     /// From a DAE at rest at t = 0 (U = 0, w = 0, consistent).
-    pub fn new(mut dae: FrictionDae) -> Result<Self, IdaError> {
+    pub fn new(dae: FrictionDae) -> Result<Self, IdaError> {
+        let rest = crate::shell::time_path::at_rest(&dae);
+        Self::from_state(dae, rest)
+    }
+
+    /// From a consistent state at t = 0 with w = 0 (the ANM's start:
+    /// [`crate::shell::time_path::start_state`]), y' = 0.
+    pub fn from_state(mut dae: FrictionDae, start: TimeState) -> Result<Self, IdaError> {
         let n = crate::series::ContinuationProblem::ndof(&dae.model);
         let n_model_pairs = dae.model.pairs.len();
-        let rest = TimeState {
-            t: 0.0,
-            u: vec![0.0; n],
-            w: vec![[0.0; 2]; n_model_pairs],
-        };
-        dae.prepare(&rest)
+        dae.prepare(&start)
             .map_err(|e| IdaError::Input(e.to_string()))?;
         let pairs: Vec<(usize, usize)> = dae.step_pairs().collect();
         let dofs = (0..pairs.len()).map(|i| dae.pair_dofs(i)).collect();
+        let mut y0 = start.u.clone();
+        for &(p, _) in &pairs {
+            y0.extend(start.w[p]);
+        }
         Ok(Self {
             dae: RefCell::new(dae),
             n,
@@ -67,7 +90,42 @@ impl ShellIda {
             dofs,
             n_model_pairs,
             max_nonlin_iters: None,
+            start: y0,
         })
+    }
+
+    /// IDA's absolute tolerance per unknown from that of the translations
+    /// (`atol`, scene length unit): the rotations atol / L (radians), the
+    /// tangential velocities w atol / t_end, with L the model's length scale
+    /// and t_end the last output time, so that one atol means the same in
+    /// m and in mm. The rotations and w are algebraic, out of the local
+    /// error test: these enter IDA's Newton test only. Measured on
+    /// scenes/strip-capstan.toml: at rtol 1e-10 IDA reaches t_end with 4,
+    /// 10 and 20 Newton iterations, 5.9e-7 off the ANM on the positions
+    /// (as with one scalar atol); at rtol 1e-12 it reaches t_end with 10
+    /// (2e-9 off), where one scalar atol stopped with IDA_CONV_FAIL at
+    /// t = 0.54 s, and it still stops with 4 and 20 (t = 0.54 s, 0.60 s):
+    /// near 1e-12 IDA's Newton test meets the round-off of this residual.
+    fn absolute_tolerances(&self, atol: f64, outputs: &[f64]) -> Vec<f64> {
+        let dae = self.dae.borrow();
+        let length = dae.model.length_scale;
+        let t_end = outputs.last().copied().unwrap_or(1.0);
+        let mut tol = vec![atol / t_end; self.dim()];
+        for (full, free) in dae.model.free.iter().enumerate() {
+            if let Some(k) = free {
+                tol[*k] = if full % crate::fe::dof::PER_NODE < 3 {
+                    atol
+                } else {
+                    atol / length
+                };
+            }
+        }
+        tol
+    }
+
+    /// The DAE (e.g. to evaluate outputs at the states of a run).
+    pub fn dae(&self) -> Ref<'_, FrictionDae> {
+        self.dae.borrow()
     }
 
     fn state(&self, t: f64, y: &[f64]) -> TimeState {
@@ -95,7 +153,7 @@ impl ShellIda {
 
     /// Integrates to each output time with IDA at rtol (atol = rtol × the
     /// scene's length scale on the translations); IDASetStopTime at every
-    /// kink of the ramps.
+    /// kink of the ramps. A failure during the integration is the error.
     pub fn solve(
         &self,
         outputs: &[f64],
@@ -103,34 +161,54 @@ impl ShellIda {
         rtol: f64,
         max_steps: i64,
     ) -> Result<ShellIdaRun, IdaError> {
+        let atol = rtol * self.dae.borrow().model.length_scale;
+        let mut run = self.solve_keeping(outputs, kinks, rtol, atol, max_steps)?;
+        match run.stop.take() {
+            Some(e) => Err(e),
+            None => Ok(run),
+        }
+    }
+
+    /// As [`Self::solve`] with the absolute tolerance of the translations
+    /// given (in the scene's length unit); a failure after the set-up ends
+    /// the run with the output times reached and the failure in `stop`.
+    pub fn solve_keeping(
+        &self,
+        outputs: &[f64],
+        kinks: &[f64],
+        rtol: f64,
+        atol: f64,
+        max_steps: i64,
+    ) -> Result<ShellIdaRun, IdaError> {
         let start = std::time::Instant::now();
         let dim = self.dim();
-        let length = self.dae.borrow().model.length_scale;
-        let mut ida = Ida::new(
-            self,
-            0.0,
-            &vec![0.0; dim],
-            &vec![0.0; dim],
-            rtol,
-            rtol * length,
-        )?;
+        let mut ida = Ida::new(self, 0.0, &self.start, &vec![0.0; dim], rtol, atol)?;
         ida.set_suppress_alg(true)?;
+        ida.set_vector_tolerances(rtol, &self.absolute_tolerances(atol, outputs))?;
         ida.set_max_num_steps(max_steps)?;
         if let Some(iters) = self.max_nonlin_iters {
             ida.set_max_nonlin_iters(iters)?;
         }
         let mut samples = vec![];
-        for &tout in outputs {
+        let mut states = vec![];
+        let mut stop = None;
+        'outputs: for &tout in outputs {
             loop {
-                let stop = kinks
+                let next = kinks
                     .iter()
                     .copied()
                     .filter(|&k| k > ida.t() * (1.0 + 1e-14))
                     .fold(tout, f64::min);
-                ida.set_stop_time(stop)?;
-                let t = ida.solve(stop, Task::Normal)?;
-                if t >= tout * (1.0 - 1e-14) {
-                    break;
+                let reached = ida
+                    .set_stop_time(next)
+                    .and_then(|_| ida.solve(next, Task::Normal));
+                match reached {
+                    Ok(t) if t >= tout * (1.0 - 1e-14) => break,
+                    Ok(_) => {}
+                    Err(e) => {
+                        stop = Some(e);
+                        break 'outputs;
+                    }
                 }
             }
             let dae = self.dae.borrow();
@@ -138,6 +216,7 @@ impl ShellIda {
                 .model
                 .expand(&ida.y()[..self.n], dae.laws.load.value(tout));
             samples.push((tout, full));
+            states.push(self.state(tout, ida.y()));
         }
         let c = ida.counters();
         Ok(ShellIdaRun {
@@ -148,6 +227,9 @@ impl ShellIda {
             error_test_fails: c.error_test_fails,
             nonlinear_conv_fails: c.nonlinear_conv_fails,
             wall_s: start.elapsed().as_secs_f64(),
+            states,
+            counters: c.common(),
+            stop,
         })
     }
 }

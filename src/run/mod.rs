@@ -23,6 +23,8 @@ pub mod recorder;
 pub mod regularization;
 pub mod section;
 pub mod shell;
+#[cfg(feature = "reference")]
+pub mod shell_reference;
 pub mod shell_time;
 pub mod time_checkpoint;
 

@@ -192,7 +192,7 @@ fn solve_with(scene: &ShellScene, progress: bool, keep: Keep) -> Result<(TimeRun
 /// The run starts at rest (U = 0) and first brings that state to
 /// equilibrium: where this fails with loads already on at t = 0, say so and
 /// name the key that ramps them, rather than a bare "no convergence".
-fn at_rest(scene: &ShellScene, e: Error) -> Error {
+pub(crate) fn at_rest(scene: &ShellScene, e: Error) -> Error {
     let fr = scene.friction.as_ref().expect("a friction scene");
     match e {
         Error::NoConvergence {
@@ -217,7 +217,12 @@ fn at_rest(scene: &ShellScene, e: Error) -> Error {
 
 /// Columns of history.csv after t and lambda: the probes, then the
 /// friction totals.
-fn row(dae: &FrictionDae, scene: &ShellScene, areas: &[f64], s: &TimeSample) -> Result<Vec<f64>> {
+pub(crate) fn row(
+    dae: &FrictionDae,
+    scene: &ShellScene,
+    areas: &[f64],
+    s: &TimeSample,
+) -> Result<Vec<f64>> {
     let state = State {
         full: &s.full,
         lambda: s.lambda,
@@ -268,14 +273,14 @@ pub fn friction_state(law: &crate::contact::FrictionLaw, speed: f64) -> (&'stati
     }
 }
 
-fn header(scene: &ShellScene) -> Vec<String> {
+pub(crate) fn header(scene: &ShellScene) -> Vec<String> {
     let mut h = vec!["t".to_string(), "lambda".to_string()];
     h.extend(scene.probes.iter().map(|p| p.name.clone()));
     h.extend(TIME_FORCE_COLUMNS.map(String::from));
     h
 }
 
-fn write_err(file: &Path) -> impl Fn(String) -> Error + '_ {
+pub(crate) fn write_err(file: &Path) -> impl Fn(String) -> Error + '_ {
     move |problem| Error::Write {
         file: file.to_path_buf(),
         problem,
@@ -615,43 +620,7 @@ fn report(
                 .map_err(|e| write_err(&file)(e.to_string()))?;
         }
         w.flush().map_err(|e| write_err(&file)(e.to_string()))?;
-        let file = dir.join("friction.csv");
-        let mut w = csv::Writer::from_path(&file).map_err(|e| write_err(&file)(e.to_string()))?;
-        let law = dae.laws.law;
-        w.write_record([
-            "node",
-            "obstacle",
-            "gap",
-            "rn",
-            "ft_x",
-            "ft_y",
-            "ft_z",
-            "vs_x",
-            "vs_y",
-            "vs_z",
-            "slip_speed",
-            "state",
-        ])
-        .map_err(|e| write_err(&file)(e.to_string()))?;
-        for f in &last.friction {
-            let speed = f.slip.norm();
-            let (state, _) = friction_state(&law, speed);
-            let mut rec = vec![
-                dae.model.node_tag(f.node).to_string(),
-                f.obstacle.to_string(),
-            ];
-            rec.extend(
-                [
-                    f.gap, f.rn, f.force[0], f.force[1], f.force[2], f.slip[0], f.slip[1],
-                    f.slip[2], speed,
-                ]
-                .map(csv_number),
-            );
-            rec.push(state.into());
-            w.write_record(&rec)
-                .map_err(|e| write_err(&file)(e.to_string()))?;
-        }
-        w.flush().map_err(|e| write_err(&file)(e.to_string()))?;
+        write_friction_csv(&dir.join("friction.csv"), &dae, &last.friction)?;
         write_fields(&dir.join("friction.vtu"), scene, &dae, last)?;
         plot(&dir.join("friction.svg"), scene.units, &head, &rows)?;
         // The probes, as a static run plots them (columns t, lambda, then
@@ -679,6 +648,52 @@ fn report(
         }
     }
     Ok(report)
+}
+
+/// friction.csv: per friction node of a sample, the gap, R_N, R_T, v_s,
+/// |v_s| and the stick/slip state.
+pub(crate) fn write_friction_csv(
+    file: &Path,
+    dae: &FrictionDae,
+    friction: &[NodeFriction],
+) -> Result<()> {
+    let mut w = csv::Writer::from_path(file).map_err(|e| write_err(file)(e.to_string()))?;
+    let law = dae.laws.law;
+    w.write_record([
+        "node",
+        "obstacle",
+        "gap",
+        "rn",
+        "ft_x",
+        "ft_y",
+        "ft_z",
+        "vs_x",
+        "vs_y",
+        "vs_z",
+        "slip_speed",
+        "state",
+    ])
+    .map_err(|e| write_err(file)(e.to_string()))?;
+    for f in friction {
+        let speed = f.slip.norm();
+        let (state, _) = friction_state(&law, speed);
+        let mut rec = vec![
+            dae.model.node_tag(f.node).to_string(),
+            f.obstacle.to_string(),
+        ];
+        rec.extend(
+            [
+                f.gap, f.rn, f.force[0], f.force[1], f.force[2], f.slip[0], f.slip[1], f.slip[2],
+                speed,
+            ]
+            .map(csv_number),
+        );
+        rec.push(state.into());
+        w.write_record(&rec)
+            .map_err(|e| write_err(file)(e.to_string()))?;
+    }
+    w.flush().map_err(|e| write_err(file)(e.to_string()))?;
+    Ok(())
 }
 
 /// The last state as a VTK surface with the friction fields per node.
@@ -736,7 +751,7 @@ fn write_fields(path: &Path, scene: &ShellScene, dae: &FrictionDae, s: &TimeSamp
 }
 
 /// The friction totals and the largest slip speed against t.
-fn plot(path: &Path, units: Units, head: &[String], rows: &[Vec<f64>]) -> Result<()> {
+pub(crate) fn plot(path: &Path, units: Units, head: &[String], rows: &[Vec<f64>]) -> Result<()> {
     let col = |name: &str| {
         head.iter()
             .position(|h| h == name)

@@ -199,9 +199,16 @@ pub fn at_rest(dae: &FrictionDae) -> TimeState {
 /// the first series at it (what `anm check` tries, so that a scene that
 /// cannot start fails there rather than at run time).
 pub fn check_start(dae: &mut FrictionDae, cfg: &TimeConfig) -> Result<()> {
+    let s = start_state(dae, cfg)?;
+    dae.series(&s).map(|_| ())
+}
+
+/// The state at rest brought to equilibrium at t = 0 (w = 0): where every
+/// run starts, the ANM's and IDA's (`anm reference ida`).
+pub fn start_state(dae: &mut FrictionDae, cfg: &TimeConfig) -> Result<TimeState> {
     let mut s = at_rest(dae);
     consistent(dae, &mut s, cfg, &mut TimeStats::default())?;
-    dae.series(&s).map(|_| ())
+    Ok(s)
 }
 
 /// [`run_from`], keeping what was computed when numerical trouble (no
@@ -787,7 +794,7 @@ fn node_of_dof(dae: &FrictionDae, k: usize) -> usize {
 /// R_T and v_s evaluated from the laws directly (eq. 3 and
 /// contact::friction::FrictionLaw::nodal, with the tangential velocity
 /// t_1 w_1 + t_2 w_2 of the state).
-fn sample(dae: &FrictionDae, s: &TimeState, t: f64) -> Result<TimeSample> {
+pub fn sample(dae: &FrictionDae, s: &TimeState, t: f64) -> Result<TimeSample> {
     let lambda = dae.laws.load.value(t);
     let full = dae.model.expand(&s.u, lambda);
     let m = dae.laws.motion.value(t);

@@ -181,3 +181,138 @@ fn anm_and_ida_stop_where_the_strip_breaks_away() {
         "{ida_stop} vs {closed}"
     );
 }
+
+/// Reads history.csv: the header and the rows.
+fn history(dir: &std::path::Path) -> (Vec<String>, Vec<Vec<f64>>) {
+    let mut r = csv::Reader::from_path(dir.join("history.csv")).expect("history.csv");
+    let head = r
+        .headers()
+        .expect("header")
+        .iter()
+        .map(String::from)
+        .collect();
+    let rows = r
+        .records()
+        .map(|rec| {
+            rec.expect("row")
+                .iter()
+                .map(|v| v.parse().expect("a number"))
+                .collect()
+        })
+        .collect();
+    (head, rows)
+}
+
+fn anm(args: &[&str]) -> std::process::Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_anm"))
+        .args(args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .expect("anm runs")
+}
+
+/// `anm reference ida` on a user's shell scene with friction (the coarse
+/// capstan): history.csv has `anm run`'s columns on the same times, and
+/// `anm run` agrees with IDA at rtol 1e-12 to 1e-8 of each probe's
+/// largest value and 1e-6 of the largest friction total (measured: 1.9e-10 and
+/// 1.9e-7; the forces carry the penalty stiffness times the positions'
+/// error). summary.json has the common counters and `stop.reason` "end".
+#[test]
+fn anm_reference_ida_checks_a_shell_run_in_time_from_the_command_line() {
+    let text = std::fs::read_to_string("scenes/strip-capstan.toml").expect("scene");
+    let text = text
+        .replace("angle = [0.0, 180.0]", "angle = [0.0, 90.0]")
+        .replace("divisions = [1, 64]", "divisions = [1, 8]")
+        .replace(
+            "line_force = [0.0, -400.0, 0.0]",
+            "line_force = [0.0, 0.0, -400.0]",
+        );
+    let scene = crate::scratch::ScratchFile::with_text("shell-ida-cli", "capstan.toml", &text);
+    let runs = crate::scratch::scratch("shell-ida-cli-runs");
+    let (anm_dir, ida_dir) = (runs.path().join("anm"), runs.path().join("ida"));
+    let s = scene.display().to_string();
+    let o = anm(&["run", &s, "--quiet", "-o", &anm_dir.display().to_string()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = anm(&[
+        "reference",
+        "ida",
+        &s,
+        "--rtol",
+        "1e-12",
+        "-o",
+        &ida_dir.display().to_string(),
+    ]);
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        o.status.success(),
+        "{stdout}{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    println!("{stdout}");
+    let (head_a, a) = history(&anm_dir);
+    let (head_i, b) = history(&ida_dir);
+    assert_eq!(head_a, head_i);
+    assert_eq!(a.len(), b.len());
+    for (ra, rb) in a.iter().zip(&b) {
+        assert_eq!(ra[0], rb[0], "output times");
+    }
+    let forces = ["rn_total", "ft_x", "ft_y", "ft_z"];
+    for (k, name) in head_a.iter().enumerate().skip(2) {
+        let size = b.iter().map(|r| r[k].abs()).fold(0.0, f64::max);
+        let diff = a
+            .iter()
+            .zip(&b)
+            .map(|(x, y)| (x[k] - y[k]).abs())
+            .fold(0.0, f64::max);
+        // ft_x is zero up to round-off (2e-11 N against 4.5 N for ft_z).
+        let scale = if forces.contains(&name.as_str()) {
+            let largest = ["rn_total", "ft_y", "ft_z"]
+                .iter()
+                .map(|f| {
+                    let j = head_a.iter().position(|h| h == f).expect("column");
+                    b.iter().map(|r| r[j].abs()).fold(0.0, f64::max)
+                })
+                .fold(0.0, f64::max);
+            (diff / largest, 1e-6)
+        } else {
+            (diff / size.max(f64::MIN_POSITIVE), 1e-8)
+        };
+        println!("{name}: max |anm - ida| = {diff:.3e} ({:.2e})", scale.0);
+        assert!(scale.0 <= scale.1, "{name}: {:.2e}", scale.0);
+    }
+    let summary: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(ida_dir.join("summary.json")).expect("summary.json"),
+    )
+    .expect("json");
+    assert_eq!(summary["stop"]["reason"], "end");
+    assert_eq!(summary["tool"], "SUNDIALS IDA");
+    for name in anm::reference::counters::Counters::NAMES {
+        assert!(summary["counters"][name].is_u64(), "{name}");
+    }
+    assert!(summary["counters"]["steps"].as_u64() > Some(0));
+}
+
+/// A static shell scene has no time for IDA, and the point-mass options
+/// do not apply to a shell: clear errors naming them, exit 1.
+#[test]
+fn anm_reference_ida_refuses_what_it_cannot_check_on_a_shell() {
+    let runs = crate::scratch::scratch("shell-ida-refusals");
+    let out = runs.path().join("out").display().to_string();
+    let o = anm(&["reference", "ida", "scenes/plate-cylinder.toml", "-o", &out]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.contains("[friction]"), "{err}");
+    let o = anm(&[
+        "reference",
+        "ida",
+        "scenes/strip-capstan.toml",
+        "--friction-row",
+        "direct",
+        "-o",
+        &out,
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.contains("--friction-row"), "{err}");
+    assert!(!std::path::Path::new(&out).join("summary.json").exists());
+}
