@@ -80,17 +80,18 @@ enum Command {
     Audit {
         scene: PathBuf,
         /// Values of omega (velocity regularization, eq. 6), comma-separated.
-        #[arg(long, value_delimiter = ',')]
+        #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
         omega: Vec<f64>,
         /// Values of zeta (normal-force regularization, eq. 11, N).
-        #[arg(long, value_delimiter = ',')]
+        #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
         zeta: Vec<f64>,
         /// Values of eta (contact regularization, eq. 3, N; on a shell
         /// scene 0 is the penalty law, the limit eta -> 0).
-        #[arg(long, value_delimiter = ',')]
+        #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
         eta: Vec<f64>,
-        /// Values of the penalty stiffness K (eq. 3, N/m).
-        #[arg(long, value_delimiter = ',')]
+        /// Values of the penalty stiffness K (eq. 3, force per length in
+        /// the scene's units).
+        #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
         penalty: Vec<f64>,
         /// Write audit.csv, audit.md and audit.svg into DIR (otherwise no
         /// files), and every run's result as DIR/items/K.json.
@@ -239,7 +240,7 @@ enum Command {
 struct ItemArgs {
     /// Run item K of the sweep only and write DIR/items/K.json (needs -o
     /// DIR); `anm merge DIR` builds the tables once every item has run.
-    #[arg(long, value_name = "K", requires = "out")]
+    #[arg(long, value_name = "K", requires = "out", allow_hyphen_values = true)]
     item: Option<usize>,
     /// Print the items of the sweep, `K<TAB>label` per line, and exit.
     #[arg(long, conflicts_with = "item")]
@@ -651,6 +652,9 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
             out,
             items,
         } => {
+            // −0 is 0 (review 19: `--eta=-0` was labelled eta=-0e0).
+            let [omega, zeta, eta, penalty] = [omega, zeta, eta, penalty]
+                .map(|v| v.into_iter().map(|x| x + 0.0).collect::<Vec<f64>>());
             // A value given twice would run twice and print two rows.
             for (key, values) in [
                 ("omega", &omega),

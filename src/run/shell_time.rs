@@ -555,6 +555,17 @@ fn report(
     if !monitored && let Some(along) = &along {
         report.notes.extend(unmonitored_compression(along, stop_t));
     }
+    if let Some((amplitude, s, [lo, hi], mean)) =
+        along.as_deref().and_then(along_strip::pressure_alternation)
+        && amplitude > along_strip::ALTERNATION
+    {
+        report.notes.push(format!(
+            "the contact pressure alternates from row to row inside a contact zone at t = {stop_t} (s = {:.4} to {:.4}, away from its edges): {lo:.4e} to {hi:.4e} around a mean of {mean:.4e}, up to ±{:.0} % of it (along.csv, friction.csv, friction.vtu); per-node pressures there are not resolved, while totals, tensions and two-row means are: read the pressure as two-row means (docs/shell-friction.md, a strip moved along its path)",
+            s[0],
+            s[1],
+            100.0 * amplitude
+        ));
+    }
     if let Some(law) = scene.friction.as_ref().map(|f| f.law) {
         // Review 10: an idler roller (its surface at the strip's speed)
         // kept the friction the load ramp had put on it; the exit tension

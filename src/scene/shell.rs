@@ -71,6 +71,15 @@ impl Units {
         stress: "stress unit",
     };
 
+    /// The unit of a penalty stiffness K (force per length), e.g. "N/mm".
+    pub fn stiffness(&self) -> String {
+        if *self == Self::UNSTATED {
+            "force unit/length unit".into()
+        } else {
+            format!("{}/{}", self.force, self.length)
+        }
+    }
+
     /// The label of a probe's unit as the scene states it (a probe's unit
     /// is "m", "N" or "-").
     pub fn of(&self, probe_unit: &str) -> &'static str {
@@ -812,6 +821,7 @@ pub fn load(path: &Path) -> Result<ShellScene> {
     if let Some(ct) = &contact {
         warnings.extend(out_of_reach(path, &obstacles, ct, &mesh.nodes));
     }
+    warnings.extend(loads_on_fixed_dofs(path, &loads, &fixed, &mesh.quads));
     // Strains are formed from absolute positions (README "Strains from
     // displacements"): their round-off grows with the distance from the
     // origin (review 5: a 1 m cantilever on a plane, moved by 300 m, took
@@ -1886,6 +1896,53 @@ fn stability_needs_inertia(
 /// Obstacle motions that only friction would feel, in a scene without it:
 /// a rotation (only the surface moves) or a translation along the obstacle's
 /// own surface (no gap changes).
+/// A warning for each load that acts on fixed translations only: it goes
+/// straight into the supports and does not load the shell (review 17: a
+/// force on clamped nodes, the scene's only load, ran to w = 0 with exit 0
+/// and no word).
+fn loads_on_fixed_dofs(
+    path: &Path,
+    loads: &[Load],
+    fixed: &BTreeMap<Dof, f64>,
+    quads: &[[usize; 4]],
+) -> Vec<String> {
+    let takes = |node: usize, direction: Option<&Vec3>| {
+        Component::DISPLACEMENT
+            .into_iter()
+            .enumerate()
+            .filter(|(k, _)| direction.is_none_or(|f| f[*k] != 0.0))
+            .any(|(_, c)| !fixed.contains_key(&Dof::new(node, c)))
+    };
+    let of_quads =
+        |elems: &[usize]| -> Vec<usize> { elems.iter().flat_map(|&e| quads[e]).collect() };
+    loads
+        .iter()
+        .enumerate()
+        .filter_map(|(i, load)| {
+            let (nodes, direction): (Vec<usize>, Option<&Vec3>) = match load {
+                Load::Nodal { nodes, force } => (nodes.clone(), Some(force)),
+                Load::Line { edges, force } => (edges.iter().flatten().copied().collect(), Some(force)),
+                Load::Traction { quads: e, traction } => (of_quads(e), Some(traction)),
+                Load::Pressure { quads: e, .. } => (of_quads(e), None),
+                // A couple acts on the rotations (the director).
+                Load::Moment { .. } => return None,
+            };
+            (!nodes.is_empty() && !nodes.iter().any(|&n| takes(n, direction))).then(|| {
+                format!(
+                    "{}: load[{i}] acts on fixed translations only ({}, every loaded direction held by a [[fix]]): it goes straight into the supports and does not load the shell; apply it to free nodes",
+                    path.display(),
+                    {
+                        let mut n = nodes.clone();
+                        n.sort_unstable();
+                        n.dedup();
+                        if n.len() == 1 { "1 node".to_string() } else { format!("{} nodes", n.len()) }
+                    }
+                )
+            })
+        })
+        .collect()
+}
+
 fn motion_warnings(path: &Path, obstacles: &[ObstacleSpec]) -> Vec<String> {
     let mut out = vec![];
     for (i, o) in obstacles.iter().enumerate() {

@@ -50,6 +50,8 @@ pub struct ShellAuditRow {
     pub steps: usize,
     pub factorizations: usize,
     pub wall_s: f64,
+    /// The run's notes (printed under the table).
+    pub notes: Vec<String>,
 }
 
 /// The smallest initial gap delta over the candidate nodes (m).
@@ -121,8 +123,10 @@ pub fn with_parameter(scene: &ShellScene, parameter: &str, value: f64) -> Result
     let delta = smallest_gap(&s);
     if eta >= k * delta {
         return Err(bad(format!(
-            "eta = {eta:e} must stay below K delta = {:e} (K = {k:e} N/m, smallest initial gap delta = {delta:e} m)",
-            k * delta
+            "eta = {eta:e} must stay below K delta = {:e} (K = {k:e} {}, smallest initial gap delta = {delta:e} {})",
+            k * delta,
+            s.units.stiffness(),
+            s.units.length
         )));
     }
     Ok(s)
@@ -176,6 +180,11 @@ pub struct ShellRunRecord {
     pub clamp_force: Option<[f64; 3]>,
     #[serde(with = "exact_opt")]
     pub balance: Option<f64>,
+    /// The run's notes (a mechanism, a penalty that carries the
+    /// deflection ...): the audit shows them under its table (review 19:
+    /// a mechanism's note never reached the audit).
+    #[serde(default)]
+    pub notes: Vec<String>,
 }
 
 impl ShellRunRecord {
@@ -196,6 +205,7 @@ impl ShellRunRecord {
             contact_force: c.contact_force,
             clamp_force: c.clamp_force,
             balance: c.balance,
+            notes: r.notes.clone(),
         }
     }
 
@@ -294,43 +304,38 @@ pub fn rows(scene: &ShellScene, items: &[ShellAuditItem]) -> Result<Vec<ShellAud
         if group.is_empty() {
             continue;
         }
-        // The least regularized run: the smallest eta, the largest K.
+        // The least regularized run that reached lambda_end (the smallest
+        // eta, the largest K), else the least regularized run.
+        let end = scene.solver.lambda_end;
+        let order = |a: &&(f64, &ShellRunRecord), b: &&(f64, &ShellRunRecord)| {
+            if name == "penalty" {
+                b.0.total_cmp(&a.0)
+            } else {
+                a.0.total_cmp(&b.0)
+            }
+        };
         let (ref_value, reference) = *group
             .iter()
-            .min_by(|a, b| {
-                if name == "penalty" {
-                    b.0.total_cmp(&a.0)
-                } else {
-                    a.0.total_cmp(&b.0)
-                }
-            })
+            .filter(|(_, r)| r.stop == "end")
+            .min_by(order)
+            .or_else(|| group.iter().min_by(order))
             .expect("non-empty");
         let (key_col, contact_col) = key_columns(scene)?;
-        let end = scene.solver.lambda_end;
         let at_end = |r: &ShellRunRecord, col: usize| {
             r.history
                 .iter()
-                .find(|row| (row[0] - end).abs() < 1e-9)
+                .rfind(|row| (row[0] - end).abs() < 1e-9)
                 .map_or(f64::NAN, |row| row[col])
         };
         let (uz_ref, rn_ref) = (at_end(reference, key_col), at_end(reference, contact_col));
-        let scale = reference
-            .history
-            .iter()
-            .map(|r| r[key_col].abs())
-            .fold(0.0, f64::max)
-            .max(f64::MIN_POSITIVE);
         let label = if name == "penalty" { "K" } else { "eta" };
         for (v, r) in group {
             let (uz, rn) = (at_end(r, key_col), at_end(r, contact_col));
-            let mut traj: f64 = 0.0;
-            for (a, b) in r.history.iter().zip(&reference.history) {
-                debug_assert!((a[0] - b[0]).abs() < 1e-9);
-                traj = traj.max((a[key_col] - b[key_col]).abs() / scale);
-            }
-            if r.history.is_empty() {
-                traj = f64::NAN;
-            }
+            let traj = if r.stop == "end" && reference.stop == "end" {
+                grid_deviation(&r.history, &reference.history, key_col)
+            } else {
+                f64::NAN
+            };
             rows.push(ShellAuditRow {
                 parameter: name,
                 value: v,
@@ -349,10 +354,51 @@ pub fn rows(scene: &ShellScene, items: &[ShellAuditItem]) -> Result<Vec<ShellAud
                 steps: r.steps,
                 factorizations: r.factorizations,
                 wall_s: r.wall_s,
+                notes: r.notes.clone(),
             });
         }
     }
     Ok(rows)
+}
+
+/// max over the output grid of |run − reference| in column `col`, divided
+/// by the largest |reference| there, rows paired by their first column (λ
+/// or t), not by index, and the start (the first value, where every run
+/// is in the unloaded state) left out: a run may write more rows than the
+/// grid (review 19: a mechanism under the penalty law wandered up to
+/// 16.7 m over 118 rows at λ = 0 before settling, and pairing by index
+/// gave 0.73 where the paths differ by 1.2e-5). Where a grid value has
+/// several rows, the last counts (the state the path settled in); NaN when
+/// no value past the start is shared.
+pub(crate) fn grid_deviation(run: &[Vec<f64>], reference: &[Vec<f64>], col: usize) -> f64 {
+    let same = |a: f64, b: f64| (a - b).abs() <= 1e-9 * a.abs().max(1.0);
+    let last_at =
+        |rows: &[Vec<f64>], x: f64| rows.iter().rev().find(|r| same(r[0], x)).map(|r| r[col]);
+    let start = run.first().map_or(f64::NAN, |r| r[0]);
+    let mut seen: Vec<f64> = vec![];
+    let mut pairs = vec![];
+    for row in run {
+        let x = row[0];
+        if same(x, start) || seen.iter().any(|&s| same(s, x)) {
+            continue;
+        }
+        seen.push(x);
+        if let (Some(a), Some(b)) = (last_at(run, x), last_at(reference, x)) {
+            pairs.push((a, b));
+        }
+    }
+    if pairs.is_empty() {
+        return f64::NAN;
+    }
+    let scale = pairs
+        .iter()
+        .map(|(_, b)| b.abs())
+        .fold(0.0, f64::max)
+        .max(f64::MIN_POSITIVE);
+    pairs
+        .iter()
+        .map(|(a, b)| (a - b).abs() / scale)
+        .fold(0.0, f64::max)
 }
 
 /// The shell audit as a sweep (`anm audit` on a shell scene): one item per
@@ -459,12 +505,14 @@ pub fn markdown(scene: &ShellScene, rows: &[ShellAuditRow]) -> String {
         contact = format!("(the key again) {contact}");
     }
     let end = scene.solver.lambda_end;
+    let force = scene.units.force;
     let mut s = format!(
-        "Regularization audit of `{}` (scene eta = {eta:e} N, K = {k:e} N/m; deviations from the least regularized run of each sweep)\n\n",
+        "Regularization audit of `{}` (scene eta = {eta:e} {force}, K = {k:e} {}; deviations from the least regularized run of each sweep that reached lambda_end)\n\n",
         scene.file.display(),
+        scene.units.stiffness(),
     );
     s += &format!(
-        "| parameter | value | stop | lambda | {key}({end}) | deviation | {contact}({end}) (N) | deviation | trajectory deviation | contact Fx, Fy, Fz (N) | support Fx, Fy, Fz (N) | abs(P + C + S)/abs(P) | max abs(R)/abs(R_lambda) | far nodes | steps | factorizations | wall (s) | reference |\n"
+        "| parameter | value | stop | lambda | {key}({end}) | deviation | {contact}({end}) ({force}) | deviation | trajectory deviation | contact Fx, Fy, Fz ({force}) | support Fx, Fy, Fz ({force}) | abs(P + C + S)/abs(P) | max abs(R)/abs(R_lambda) | far nodes | steps | factorizations | wall (s) | reference |\n"
     );
     s += "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
     for r in rows {
@@ -487,10 +535,15 @@ pub fn markdown(scene: &ShellScene, rows: &[ShellAuditRow]) -> String {
             opt(r.check.clamp_force.map(|f| f[2])),
             opt(r.check.balance),
             r.check.max_residual,
-            if r.far_nodes_skipped {
-                format!("skipped (pull <= {:.1e} N)", r.skipped_pull_bound)
-            } else {
-                "all active".into()
+            // Review 19: "skipped (pull <= 0)" read as nodes skipped
+            // where the search allowed it and none was.
+            match (r.far_nodes_skipped, r.skipped_pull_bound > 0.0) {
+                (true, true) => format!(
+                    "skipped (pull <= {:.1e} {})",
+                    r.skipped_pull_bound, scene.units.force
+                ),
+                (true, false) => "none beyond reach".into(),
+                (false, _) => "all active".into(),
             },
             r.steps,
             r.factorizations,
@@ -505,6 +558,11 @@ pub fn markdown(scene: &ShellScene, rows: &[ShellAuditRow]) -> String {
             r.value,
             r.message.as_deref().unwrap_or_default()
         );
+    }
+    for r in rows {
+        for n in &r.notes {
+            s += &format!("\n{} = {:e}, note: {n}", r.parameter, r.value);
+        }
     }
     s
 }
@@ -564,14 +622,14 @@ pub fn write(scene: &ShellScene, rows: &[ShellAuditRow], dir: &Path) -> Result<(
         "steps".to_string(),
         "factorizations".to_string(),
     ];
-    let titles: Vec<(String, String, &str)> = ["eta", "penalty"]
+    let titles: Vec<(String, String, String)> = ["eta", "penalty"]
         .into_iter()
         .filter(|p| rows.iter().any(|r| r.parameter == *p))
         .map(|p| {
             let (name, unit) = if p == "penalty" {
-                ("K", "K (N/m)")
+                ("K", format!("K ({})", scene.units.stiffness()))
             } else {
-                ("eta", "eta (N)")
+                ("eta", format!("eta ({})", scene.units.force))
             };
             (
                 format!("{stem}: deviation from the least regularized run, {name} swept"),
@@ -595,7 +653,7 @@ pub fn write(scene: &ShellScene, rows: &[ShellAuditRow], dir: &Path) -> Result<(
         };
         panels.extend(swept_panels(
             (dev_title, cost_title),
-            unit,
+            unit.as_str(),
             vec![
                 curve(0, &|r| r.key_deviation),
                 curve(1, &|r| r.contact_deviation),
@@ -652,6 +710,25 @@ mod tests {
             Err(Error::Invalid { key, problem, .. }) => (key, problem),
             other => panic!("expected an invalid-input error, got {other:?}"),
         }
+    }
+
+    /// Review 19: a run with extra rows at λ = 0 (a mechanism under the
+    /// penalty law wandered there before settling) is compared with the
+    /// reference at the same λ, the last row at each λ counting; pairing by
+    /// index compared λ = 0.1 with λ = 0 and gave 0.73 for 1.2e-5.
+    #[test]
+    fn trajectories_are_paired_by_lambda_not_by_row() {
+        let reference = vec![vec![0.0, 0.0], vec![0.5, 1.0], vec![1.0, 2.0]];
+        let wandering = vec![
+            vec![0.0, 0.0],
+            vec![0.0, 16.7],
+            vec![0.0, 0.0],
+            vec![0.5, 1.001],
+            vec![1.0, 2.002],
+        ];
+        let d = grid_deviation(&wandering, &reference, 1);
+        assert!((d - 1e-3).abs() < 1e-12, "{d}");
+        assert!(grid_deviation(&[vec![0.0, 0.0], vec![0.25, 1.0]], &reference, 1).is_nan());
     }
 
     #[test]

@@ -396,17 +396,23 @@ fn shell_case(
                 wall_s: run.wall_s,
                 detail: format!(
                     "uz_A(1) = {}{}; max residual at lambda = {} over {} grid points; {}",
-                    uz1.map_or("not reached".into(), |u| format!("{u:.7} {length}")),
+                    match (uz1, run.columns.iter().any(|c| c == "uz_A")) {
+                        (Some(u), _) => format!("{u:.7} {length}"),
+                        // Review 19: a user's scene without plate-cylinder's
+                        // probe read as a run that did not reach 1.
+                        (None, false) => "– (no uz_A probe)".into(),
+                        (None, true) => "not reached".into(),
+                    },
                     uz_ref.map_or(String::new(), |u| format!(" (canonical {u} {length})")),
                     c.worst_lambda,
                     c.points,
-                    if run.far_nodes_skipped {
-                        format!(
+                    match (run.far_nodes_skipped, run.skipped_pull_bound > 0.0) {
+                        (true, true) => format!(
                             "far candidates skipped (pull <= {:.1e} N)",
                             run.skipped_pull_bound
-                        )
-                    } else {
-                        "every candidate active".into()
+                        ),
+                        (true, false) => "no candidate beyond reach".into(),
+                        (false, _) => "every candidate active".into(),
                     }
                 ),
             }
@@ -547,6 +553,19 @@ impl StressSweep {
     /// The matrix of the full axes on the scenes `DIR/CASE.toml`.
     pub fn new(scenes: &Path, cases: &[String], max_steps: usize) -> Result<Self> {
         let (mut friction, mut shells, mut inputs) = (vec![], vec![], vec![]);
+        // A case given twice would run twice and print its rows twice
+        // (review 19).
+        if let Some(twice) = cases
+            .iter()
+            .enumerate()
+            .find_map(|(i, c)| cases[..i].contains(c).then_some(c))
+        {
+            return Err(Error::Invalid {
+                file: scenes.to_path_buf(),
+                key: "--cases".into(),
+                problem: format!("`{twice}` is given twice"),
+            });
+        }
         for name in cases {
             let path = scenes.join(format!("{name}.toml"));
             let text = crate::scene::read(&path)?;

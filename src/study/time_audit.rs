@@ -40,6 +40,10 @@ pub struct TimeRunRecord {
     /// the runs' notes on the friction left from the ramp reached it).
     #[serde(default)]
     pub notes: Vec<String>,
+    /// The diagnosis of a stop before t_end (review 19: the audit showed
+    /// an empty message for runs stopped by numerical trouble).
+    #[serde(default)]
+    pub stop_message: Option<String>,
 }
 
 /// One item: a parameter value and its run, or the error that stopped it.
@@ -141,6 +145,10 @@ pub fn run_item(parameter: &str, value: f64, scene: &ShellScene) -> TimeAuditIte
             max_residual: r.max_residual,
             wall_s: r.wall_s,
             notes: r.notes,
+            stop_message: r.stop.message.map(|m| match r.stop.t {
+                Some(t) => format!("stop at t = {t:e} s: {m}"),
+                None => m,
+            }),
         }),
         Ok(Err(e)) => Err(e.to_string()),
         Err(panic) => Err(format!("panicked: {panic}")),
@@ -201,13 +209,6 @@ pub fn rows(scene: &ShellScene, items: &[TimeAuditItem]) -> Vec<TimeAuditRow> {
                     at_end(r, slip_col),
                 )
             });
-        let scale = ref_record.map_or(f64::NAN, |r| {
-            r.history
-                .iter()
-                .map(|row| row[key_col].abs())
-                .fold(0.0, f64::max)
-                .max(f64::MIN_POSITIVE)
-        });
         for it in group {
             let row = match &it.outcome {
                 Ok(r) => {
@@ -216,18 +217,22 @@ pub fn rows(scene: &ShellScene, items: &[TimeAuditItem]) -> Vec<TimeAuditRow> {
                         at_end(r, contact_col),
                         at_end(r, slip_col),
                     );
-                    let trajectory = ref_record.map_or(f64::NAN, |rr| {
-                        r.history
-                            .iter()
-                            .zip(&rr.history)
-                            .map(|(a, b)| (a[key_col] - b[key_col]).abs() / scale)
-                            .fold(0.0, f64::max)
-                    });
+                    // A run that stopped before t_end has no trajectory
+                    // to compare (review 19: its t = 0 row alone gave 0).
+                    let trajectory = ref_record
+                        .filter(|_| r.stop == "end")
+                        .map_or(f64::NAN, |rr| {
+                            super::shell_audit::grid_deviation(&r.history, &rr.history, key_col)
+                        });
                     TimeAuditRow {
                         parameter: name.to_string(),
                         value: it.value,
                         stop: r.stop.clone(),
-                        message: (!r.notes.is_empty()).then(|| r.notes.join("; ")),
+                        message: {
+                            let parts: Vec<String> =
+                                r.stop_message.iter().chain(&r.notes).cloned().collect();
+                            (!parts.is_empty()).then(|| parts.join("; "))
+                        },
                         key,
                         key_deviation: deviation(key, key_ref),
                         contact,

@@ -889,3 +889,45 @@ fn anm_correction_keys_are_refused_with_newton() {
         &["solver.correct", "not used by solver.method = \"newton\""],
     );
 }
+
+/// A load on clamped nodes only (review 17: the scene's only load, it ran
+/// to w = 0 with exit 0 and no word) is named in a warning; a load on the
+/// free edge is not.
+#[test]
+fn a_load_on_fixed_translations_only_is_warned_of() {
+    let text = |group: &str| {
+        format!(
+            r#"[scene]
+kind = "shell"
+[mesh]
+type = "rectangle"
+x = [0.0, 1.0]
+y = [0.0, 0.1]
+divisions = [4, 1]
+[material]
+young = 1e9
+poisson = 0.3
+[shell]
+thickness = 0.01
+[[fix]]
+group = "s0"
+clamp = true
+[[load]]
+group = "{group}"
+force = [0.0, 0.0, 1.0]
+[solver]
+lambda_end = 1.0
+[output]
+lambda_step = 0.5
+"#
+        )
+    };
+    let free = ScratchFile::with_text("load-on-fixed", "free.toml", &text("s1"));
+    assert!(load(&free).unwrap().warnings.is_empty());
+    let held = ScratchFile::with_text("load-on-fixed", "held.toml", &text("s0"));
+    let w = load(&held).unwrap().warnings.join("\n");
+    assert!(
+        w.contains("held.toml") && w.contains("load[0]") && w.contains("fixed translations only"),
+        "{w}"
+    );
+}
