@@ -54,6 +54,14 @@ pub enum Error {
         at: f64,
         what: String,
     },
+    /// The path goes on but no longer advances: steps many orders shorter
+    /// than its first, one after another.
+    #[error("{param} = {at:.9e}: {what}")]
+    Stalled {
+        param: &'static str,
+        at: f64,
+        what: String,
+    },
     #[error("step {step}, {param} = {at:.9e}: step length collapsed to {length:.3e}")]
     StepCollapse {
         step: usize,
@@ -138,6 +146,7 @@ impl Error {
             Error::NoConvergence { .. } => "no_convergence",
             Error::NonFinite { .. } => "non_finite",
             Error::StepCollapse { .. } => "step_collapse",
+            Error::Stalled { .. } => "stalled",
             Error::Write { .. } => "write",
             Error::Study { .. } => "study",
             Error::OffPath { .. } => "off_path",
@@ -156,6 +165,7 @@ impl Error {
             | Error::NoConvergence { at, .. }
             | Error::NonFinite { at, .. }
             | Error::StepCollapse { at, .. }
+            | Error::Stalled { at, .. }
             | Error::OffPath { at, .. }
             | Error::Interrupted { at, .. }
             | Error::ContactMissed { at, .. }

@@ -430,6 +430,8 @@ fn run_inner(
             // The step before the current one: its end inertia is the
             // current step's start inertia (critical points, DESIGN §8).
             let mut pending: Option<PathStep> = None;
+            // Steps in a row that advance the path by almost nothing.
+            let (mut crawl, mut first_length) = (0usize, None::<f64>);
             // Negative pivots of the tangent at the path's end, when factored.
             let mut end_pivots: Option<Option<usize>> = None;
             let secondary = match scene.branch {
@@ -452,6 +454,19 @@ fn run_inner(
                     Err(stop) => break stop,
                 };
                 let stats = path.stats().clone();
+                let first = *first_length.get_or_insert(step.length);
+                crawl = if step.length < CRAWL * first {
+                    crawl + 1
+                } else {
+                    0
+                };
+                if crawl >= CRAWL_STEPS {
+                    break PathStop::Failed(Error::Stalled {
+                        param: "lambda",
+                        at: step.lambda_end,
+                        what: crawl_diagnosis(scene, &step, first, crawl),
+                    });
+                }
                 let model: &mut ShellModel = path.problem();
                 if far_skipped {
                     let active = model.active_pairs().len();
@@ -1116,6 +1131,30 @@ fn secondary_start(
         &mut stats,
     )?;
     Ok((end.u, end.lambda, phi))
+}
+
+/// A step shorter than this share of the run's first step advances the
+/// path by almost nothing.
+const CRAWL: f64 = 1e-12;
+
+/// Such steps in a row stop the run (review 19: the penalty law at K =
+/// 1e9 N/mm took 20,000 steps of 1e-14 at the contact's first touch, 75 s,
+/// and ended on max_steps with no hint).
+const CRAWL_STEPS: usize = 50;
+
+/// Why the path stalled, and the key that likely lets it go on.
+fn crawl_diagnosis(scene: &ShellScene, step: &PathStep, first: f64, steps: usize) -> String {
+    let hint = match &scene.contact {
+        Some(ct) if ct.eta == 0.0 => format!(
+            "; under the penalty law (contact.eta = 0) with contact.k = {:e}, K times the round-off of a gap exceeds the force tolerance at the law's kink, where a node first touches: a smaller contact.k, or contact.eta > 0 (its switch is smooth), lets the path past",
+            ct.k
+        ),
+        _ => "; the path may be at a point it cannot pass at this solver.residual_tol (a larger one may), or at a kink of a law".into(),
+    };
+    format!(
+        "the path stalled: {steps} steps in a row each advanced by less than {CRAWL:e} of the first step's length ({:.3e} against {first:.3e}), the last ending with a relative residual of {:.3e}{hint}",
+        step.length, step.end_residual
+    )
 }
 
 /// A path stopped (not ended) below its start after reaching `reach`

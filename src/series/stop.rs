@@ -119,6 +119,11 @@ pub fn clone_error(e: &Error) -> Error {
             problem: problem.clone(),
         },
         Error::Interrupted { param, at } => Error::Interrupted { param, at: *at },
+        Error::Stalled { param, at, what } => Error::Stalled {
+            param,
+            at: *at,
+            what: what.clone(),
+        },
         Error::SingularMatrix {
             step,
             param,

@@ -591,7 +591,14 @@ fn run_implicit(
                 let a = a_exp.min(horizon - s.t);
                 if a >= length && a >= cfg.min_step {
                     let t0 = s.t;
+                    let u0 = s.u.clone();
                     s = series_step(dae, cfg, &series, &s, a, horizon, &mut next_out, samples)?;
+                    // The backward Euler error estimate extrapolates through
+                    // the last step, this one (review 19: through the last
+                    // implicit step, 2.3e-14 s long, before a series step
+                    // of 2.5e-7 s, its slope was bogus and the steps
+                    // collapsed to 4e-17 s on a sliding plate at ω = 0.03).
+                    prev = Some((u0, s.t - t0));
                     scale = scale.max(size_of(&s.u));
                     h = h.max(a);
                     probe_every = 1;
@@ -711,7 +718,21 @@ fn run_implicit(
                 // (review 13: a slack strip, T = 0, and a 1e6 N tension
                 // at t = 1.7e-9 s, with 0.009 N applied, were both told of
                 // a pull above what friction can hold).
-                let (load, motion) = (dae.laws.load.value(s.t), dae.laws.motion.value(s.t));
+                // The motion ramp counts only where an obstacle moves
+                // (review 18: a plate driven by a prescribed edge value,
+                // its load ramp at 9e-7, was told of a pull because the
+                // motion factor of its fixed plane was 1).
+                let moving = dae
+                    .laws
+                    .motions
+                    .iter()
+                    .any(|m| !matches!(m, crate::contact::Motion::Fixed));
+                let load = dae.laws.load.value(s.t);
+                let motion = if moving {
+                    dae.laws.motion.value(s.t)
+                } else {
+                    0.0
+                };
                 let unloaded = dae.model.dead.iter().all(|&f| f == 0.0)
                     && dae.model.prescribed.iter().all(|&x| x == 0.0)
                     && dae
@@ -719,11 +740,22 @@ fn run_implicit(
                         .extra_loads
                         .iter()
                         .all(|(_, f)| f.iter().all(|&x| x == 0.0));
+                // No friction node pressed: the only capacity is the
+                // floor f zeta (review 18: a plate 5 cm above its plane,
+                // pulled, was told of a pull above what friction holds).
+                let pressed = sample(dae, &s, s.t)
+                    .ok()
+                    .map(|smp| smp.friction.iter().map(|f| f.rn).fold(0.0, f64::max));
+                let zeta = dae.laws.law.zeta.unwrap_or(0.0);
                 let cause = if unloaded {
                     "the scene applies no load, so the strip is slack: nothing presses it onto the obstacles, and a moving one drags it only through the regularized friction's floor f zeta; give the strip its tension".to_string()
                 } else if load < 1e-3 && motion < 1e-3 {
                     format!(
                         "the loads and motions are at {load:.1e} and {motion:.1e} of their full values here, so the trouble is in the regularized friction's first instants, not a pull: a larger friction.zeta or friction.omega, or a slower ramp relative to the loads' size, may run"
+                    )
+                } else if let Some(rn) = pressed.filter(|&rn| rn <= zeta) {
+                    format!(
+                        "no friction node is pressed onto an obstacle (largest R_N = {rn:.3e}, at most friction.zeta = {zeta:e}): friction holds only through its floor f zeta per node, which the loads here exceed; check the gaps and that the loads press the shell onto the obstacles"
                     )
                 } else {
                     "the quasi-static solution may cease to exist here (e.g. a pull above what friction can hold)".to_string()

@@ -120,3 +120,39 @@ fn a_cantilever_settles_flat_on_a_plane_under_the_penalty_law() {
     );
     assert!((got - closed).abs() <= 1e-4 * closed, "{got} vs {closed}");
 }
+
+/// Review 19: a cantilever's tip pushed onto a plane under the penalty law
+/// (contact.eta = 0) with K = 1e9 N/mm took 20,000 steps of 1e-14 at the
+/// first touch (λ = 0.4375 = k_b g / P, 75 s) and ended on max_steps with
+/// no hint. It now stops within CRAWL_STEPS with a diagnosis that names
+/// the penalty law and contact.k, and eta = 1e-6 runs the same scene to
+/// the end with the contact force of rigid contact, P − k_b g = 16.875 N.
+#[test]
+fn a_path_that_stalls_at_a_stiff_penalty_kink_stops_and_names_the_key() {
+    let path = format!(
+        "{}/tests/data/cantilever-tip-stiff-penalty.toml",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    let mut sc = anm::scene::shell::load(std::path::Path::new(&path)).unwrap();
+    let r = run_loaded(&sc, None, false).expect("runs");
+    let message = r.stop.message.clone().unwrap_or_default();
+    println!("{} steps: {} — {message}", r.steps, r.stop.reason);
+    assert_eq!(r.stop.reason, "stalled", "{:?}", r.stop);
+    assert!(r.steps < 100, "{}", r.steps);
+    assert!((r.stop.lambda.unwrap() - 0.4375).abs() < 1e-3);
+    assert!(
+        message.contains("contact.eta = 0") && message.contains("contact.k"),
+        "{message}"
+    );
+    sc.contact.as_mut().unwrap().eta = 1e-6;
+    let r = run_loaded(&sc, None, false).expect("runs");
+    assert_eq!(r.stop.reason, "end", "{:?}", r.stop);
+    let (p, kb, g) = (30.0, 2.625, 5.0);
+    let rn = r.end["rn_total"];
+    println!(
+        "eta = 1e-6: {} steps, contact {rn:.6} N against {}",
+        r.steps,
+        p - kb * g
+    );
+    assert!((rn - (p - kb * g)).abs() <= 1e-2 * (p - kb * g), "{rn}");
+}

@@ -527,3 +527,32 @@ fn a_shell_run_in_time_reports_the_common_counters() {
     assert_eq!(names, expected);
     assert_eq!(written["linear_solves"].as_u64(), Some(c.linear_solves));
 }
+
+/// Review 19: a plate on a plane that starts to translate over [2, 4] µs
+/// (ω = 0.03) stopped at t = 4.25 µs with "implicit step length collapsed
+/// to 4e-17 s ... the quasi-static solution may cease to exist", exit 2,
+/// at eps 1e-7, 1e-8 and 1e-9 (1e-6 and 1e-10 ran). The backward Euler
+/// error estimate extrapolated through the last implicit step (2.3e-14 s)
+/// across the series step taken since (2.5e-7 s). Every eps now reaches
+/// t_end with the held edge's reaction at f R_N g(V).
+#[test]
+fn series_steps_between_implicit_ones_keep_the_error_estimate_sound() {
+    let path = Path::new("tests/data/slide-plate-microsecond-ramps.toml");
+    for eps in [1e-7, 1e-8, 1e-9] {
+        let mut sc = load(path).expect("scene loads");
+        sc.solver.eps = eps;
+        let law = sc.friction.as_ref().expect("friction").law;
+        let r = shell_time::run(&sc, None).expect("runs");
+        assert_eq!(r.stop.reason, "end", "eps {eps}: {:?}", r.stop.message);
+        let v = 0.01;
+        let g = v / (v * v + (law.omega * law.vc).powi(2)).sqrt();
+        let expected = law.f * end(&r, "rn_total") * g;
+        let reaction = -end(&r, "reaction_x");
+        let rel = (reaction - expected).abs() / expected;
+        println!(
+            "eps {eps:e}: {} steps ({} implicit), reaction {reaction:.9} N against f R_N g = {expected:.9} N ({rel:.1e})",
+            r.steps, r.implicit_steps
+        );
+        assert!(rel <= 1e-6, "eps {eps}: {reaction} vs {expected}");
+    }
+}
