@@ -1383,8 +1383,17 @@ fn shell_summary(report: &anm::run::RunReport, out: &std::path::Path) -> ExitCod
     for n in &report.notes {
         println!("  note: {n}");
     }
-    // The critical points the path crossed (summary.json `events`).
-    for e in &report.events {
+    // The critical points the path crossed (summary.json `events`), the
+    // first SHOWN_EVENTS of them (review 17: 290 lines of a path
+    // wandering about a mechanism flooded the console).
+    const SHOWN_EVENTS: usize = 20;
+    if report.events.len() > SHOWN_EVENTS {
+        println!(
+            "  {} critical points; the first {SHOWN_EVENTS} below, all in summary.json `events`",
+            report.events.len()
+        );
+    }
+    for e in report.events.iter().take(SHOWN_EVENTS) {
         let pivots = e.negative_pivots.map_or(String::new(), |(a, b)| {
             format!("; negative pivots {a} -> {b}")
         });

@@ -552,7 +552,15 @@ fn run_inner(
                     // the run does not go (an Euler column ending at 1.2
                     // reported one at 102 before its bifurcation at 1.03).
                     let e = bifurcation::geometric(&step, &g);
-                    if (e.lambda - cfg.lambda_end) * cfg.lambda_end.signum() <= 0.0 {
+                    // The same point seen ahead by the steps that close in
+                    // on it is one event (review 17: a rolled strip listed
+                    // lambda = 0.8106399 four times, steps 21-24).
+                    let seen = rec.state.events.last().is_some_and(|p| {
+                        p.kind == bifurcation::Kind::Geometric.name()
+                            && (p.lambda - e.lambda).abs()
+                                <= SAME_POINT * e.lambda.abs().max(cfg.lambda_end.abs())
+                    });
+                    if (e.lambda - cfg.lambda_end) * cfg.lambda_end.signum() <= 0.0 && !seen {
                         events.push(e);
                     }
                 }
@@ -1015,6 +1023,24 @@ fn run_inner(
                 cfg.lambda_end,
             ));
             notes.extend(without_inertia(stats.linear.symmetric_without_inertia));
+            let near_start = rec
+                .state
+                .events
+                .iter()
+                .filter(|e| e.lambda.abs() <= NEAR_START * cfg.lambda_end.abs())
+                .count();
+            if near_start > CROWD {
+                notes.push(format!(
+                    "{near_start} of the {} critical points lie within {NEAR_START:e} of lambda_end from the unloaded state: the path wanders about lambda = 0, where the shell is held by little more than eq. (3)'s regularization (a mechanism, or a load that pulls it off its obstacles); the events and the stop there say nothing of the shell's stability: hold the shell, or check that the loads press it onto the obstacles",
+                    rec.state.events.len()
+                ));
+            }
+            if rec.state.events.len() > MODE_FILES {
+                notes.push(format!(
+                    "{} critical points: mode_K.vtu is written for the first {MODE_FILES}",
+                    rec.state.events.len()
+                ));
+            }
             // Review 15: a free plate held only by penalty-law candidates
             // (eta = 0: no force before they touch) fell through its gap
             // at lambda = 4e-13 and rocked, reporting two "bifurcations".
@@ -1028,8 +1054,19 @@ fn run_inner(
             // Review 15: every step of a strip on a plane was accepted at the
             // floor (1.2e-5 against 1e-6) with only summary.json saying so.
             if stats.round_off_stops > 0 {
+                // Review 17: "0.53 relative" read as a loose answer; it was
+                // the residual over loads near 0 (a punch's approach).
+                let share = (stats.round_off_lambda / cfg.lambda_end).abs();
+                let small = if share < 0.1 {
+                    format!(
+                        " to the forces at lambda = {:.3e}, {share:.1e} of lambda_end, where the forces may be small: before a contact or under small loads",
+                        stats.round_off_lambda
+                    )
+                } else {
+                    format!(" to the forces at lambda = {:.3e}", stats.round_off_lambda)
+                };
                 notes.push(format!(
-                    "{} corrections stopped at the round-off floor of the residual, above solver.residual_tol = {:e} (the largest accepted: {:.2e} relative): the answers there are as accurate as that floor (summary.json stats.round_off_stops, round_off_residual)",
+                    "{} corrections stopped at the round-off floor of the residual, above solver.residual_tol = {:e} (the largest accepted: {:.2e} relative{small}): the answers there are as accurate as that floor (summary.json stats.round_off_stops, round_off_residual, round_off_lambda)",
                     stats.round_off_stops, cfg.residual_tol, stats.round_off_residual
                 ));
             }
@@ -1267,19 +1304,32 @@ fn critical_points(
     }
 }
 
+/// Geometric estimates of consecutive steps this close (relative) are one
+/// point.
+const SAME_POINT: f64 = 1e-6;
+
+/// Mode files a run writes at most (review 17: a path wandering about a
+/// mechanism wrote 292, 9 MB).
+const MODE_FILES: usize = 50;
+
+/// Events within this share of lambda_end of the start, more than
+/// [`CROWD`] of them, are a path wandering about the unloaded state.
+const NEAR_START: f64 = 1e-6;
+const CROWD: usize = 20;
+
 /// Records an event: its mode as `mode_K.vtu` (K counts the run's events
-/// from 1) and its dominant wavelength.
+/// from 1, the first [`MODE_FILES`]) and its dominant wavelength.
 fn record_event(rec: &mut Recorder, model: &ShellModel, e: Event) -> Result<EventRecord> {
     let k = rec.state.events.len() + 1;
     let full = model.expand(&e.mode, 0.0);
     let wave = crate::output::mode::wavelength(&model.x0, &model.a30, &model.quads(), &full);
     let mode = match &rec.dir {
-        Some(d) => {
+        Some(d) if k <= MODE_FILES => {
             let name = format!("mode_{k}.vtu");
             crate::output::mode::write(&d.join(&name), &model.x0, &rec.scene.mesh.quads, &full)?;
             Some(name)
         }
-        None => None,
+        _ => None,
     };
     let r = EventRecord {
         kind: e.kind.name().to_string(),

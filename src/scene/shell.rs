@@ -820,6 +820,10 @@ pub fn load(path: &Path) -> Result<ShellScene> {
     }
     if let Some(ct) = &contact {
         warnings.extend(out_of_reach(path, &obstacles, ct, &mesh.nodes));
+        if friction.is_none() {
+            let driven = !loads.is_empty() || fixed.values().any(|&v| v != 0.0);
+            warnings.extend(moving_away(path, &obstacles, ct, &mesh.nodes, driven));
+        }
     }
     warnings.extend(loads_on_fixed_dofs(path, &loads, &fixed, &mesh.quads));
     // Strains are formed from absolute positions (README "Strains from
@@ -1965,6 +1969,41 @@ fn motion_warnings(path: &Path, obstacles: &[ObstacleSpec]) -> Vec<String> {
             "{}: obstacle[{i}].motion {what}, which only friction feels: without [friction] it has no effect",
             path.display()
         ));
+    }
+    out
+}
+
+/// A warning for each translating obstacle whose motion opens the gap of
+/// every contact candidate (review 17: a punch given an upward velocity
+/// above a strip stopped with "no convergence after 1 iterations" and
+/// nothing saying it never comes near the shell).
+fn moving_away(
+    path: &Path,
+    obstacles: &[ObstacleSpec],
+    contact: &ContactSpec,
+    nodes: &[Vec3],
+    driven: bool,
+) -> Vec<String> {
+    let mut out = vec![];
+    for (i, o) in obstacles.iter().enumerate() {
+        let Motion::Translate { velocity } = o.motion else {
+            continue;
+        };
+        // dh/dλ = −n · v at each candidate (the obstacle moves by λ v).
+        let opening = contact.nodes.iter().all(|&n| {
+            o.shape
+                .gap(&nodes[n])
+                .is_some_and(|g| -g.n.dot(&velocity) > 0.0)
+        });
+        // With loads the shell may deflect onto a receding obstacle
+        // (scenes/verification/moving-plane.toml).
+        if velocity.norm() > 0.0 && !contact.nodes.is_empty() && opening && !driven {
+            out.push(format!(
+                "{}: obstacle[{i}] ({}) moves away from every contact candidate (motion.velocity opens each gap) and the scene has no load or prescribed value: nothing drives the shell but the faint pull of eq. (3)'s regularization; check the sign of its velocity",
+                path.display(),
+                o.name
+            ));
+        }
     }
     out
 }

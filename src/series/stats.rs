@@ -34,6 +34,9 @@ pub struct Stats {
     /// The largest relative residual |R| / |R_lambda| at those stops.
     #[serde(default)]
     pub round_off_residual: f64,
+    /// The load parameter of that largest stop.
+    #[serde(default)]
+    pub round_off_lambda: f64,
     /// Seconds spent assembling tangents (and residuals).
     pub assembly_s: f64,
     pub factorization_s: f64,

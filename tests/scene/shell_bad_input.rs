@@ -931,3 +931,27 @@ lambda_step = 0.5
         "{w}"
     );
 }
+
+/// Review 17: a punch given the wrong sign of velocity, the scene's only
+/// drive, moves away from every candidate: a warning says so before the
+/// run; the same punch moving down is not warned of.
+#[test]
+fn an_obstacle_that_only_moves_away_from_the_shell_is_warned_of() {
+    let text = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/tests/data/three-point-bending.toml"
+    ))
+    .expect("scene");
+    let down = ScratchFile::with_text("moving-away", "down.toml", &text);
+    assert!(load(&down).unwrap().warnings.is_empty());
+    let up = text.replace(
+        "velocity = [0.0, 0.0, -2e-3]",
+        "velocity = [0.0, 0.0, 2e-3]",
+    );
+    let up = ScratchFile::with_text("moving-away", "up.toml", &up);
+    let w = load(&up).unwrap().warnings.join("\n");
+    assert!(
+        w.contains("up.toml") && w.contains("moves away from every contact candidate"),
+        "{w}"
+    );
+}

@@ -83,3 +83,44 @@ fn a_path_driven_only_by_a_moving_obstacle_runs_to_its_end() {
         "uz {uz} against {beam}"
     );
 }
+
+/// Review 17: a heavy strip on a floor with its loads reversed (lambda_end
+/// = -1: its weight lifts it off, held only by eq. (3)'s faint pull)
+/// wandered about lambda = 0 for 553 steps, printed 290 "bifurcations" at
+/// |lambda| < 2e-7 and wrote 292 mode files. The run now says the path
+/// wanders about the unloaded state, prints the first 20 events and
+/// writes at most 50 mode files.
+#[test]
+fn a_path_wandering_about_the_unloaded_state_is_noted_and_bounded() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data/strip-pulled-off-floor.toml");
+    let scene = anm::scene::shell::load(&path).expect("scene");
+    let dir = crate::scratch::scratch("wandering");
+    let r = run_loaded(&scene, Some(dir.path()), false).expect("run");
+    let near = r.events.iter().filter(|e| e.lambda.abs() <= 1e-6).count();
+    println!(
+        "{} steps, stop {}, {} events ({near} within 1e-6 of the start)",
+        r.steps,
+        r.stop.reason,
+        r.events.len()
+    );
+    assert!(near > 20, "{near}");
+    assert!(
+        r.notes
+            .iter()
+            .any(|n| n.contains("wanders about lambda = 0")),
+        "{:?}",
+        r.notes
+    );
+    let modes = std::fs::read_dir(dir.path())
+        .unwrap()
+        .filter(|f| {
+            f.as_ref()
+                .unwrap()
+                .file_name()
+                .to_string_lossy()
+                .starts_with("mode_")
+        })
+        .count();
+    assert!(modes <= 50, "{modes} mode files");
+}
