@@ -19,8 +19,9 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Solve a scene and write history.csv, steps.csv, summary.json and a plot into DIR.
-    /// Ctrl-C or SIGTERM stops a shell run at the next step end with consistent
+    /// Solve a scene and write its files into DIR: history.csv, summary.json
+    /// and plots always; steps.csv on a path in lambda and on a point-mass
+    /// scene, friction.csv on a shell in time (README, "What a run writes"). Ctrl-C or SIGTERM stops a shell run at the next step end with consistent
     /// files; `anm run --resume DIR` continues it.
     Run {
         /// The scene file (not with --resume).
@@ -1262,6 +1263,17 @@ fn time_summary(r: &anm::run::shell_time::TimeReport, out: &std::path::Path) -> 
         r.friction_nodes,
         out.display()
     );
+    // The last output row, as a static run prints its probes (review 17:
+    // the main job's answer was only in history.csv).
+    let last: Vec<String> = r
+        .end
+        .iter()
+        .filter(|(k, _)| !matches!(k.as_str(), "t" | "lambda"))
+        .map(|(k, v)| format!("{k} = {v:.6e}"))
+        .collect();
+    if let Some(t) = r.end.get("t") {
+        println!("  at t = {t:.6} s (last output row): {}", last.join(", "));
+    }
     match (r.stop.node, r.stop.reason.as_str()) {
         (Some(n), "singularity") => println!("  singular point at node {n}"),
         (Some(n), _) => println!("  the trouble is located at node {n}"),

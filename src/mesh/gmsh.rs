@@ -74,9 +74,16 @@ fn type_name(t: usize) -> &'static str {
 
 /// Reads a .msh 4.1 ASCII file.
 pub fn read(path: &Path) -> Result<Mesh> {
-    let text = std::fs::read_to_string(path).map_err(|e| Error::Io {
+    let bytes = std::fs::read(path).map_err(|e| Error::Io {
         file: path.to_path_buf(),
         source: e,
+    })?;
+    // A binary .msh is not text (review 17: meshio writes binary by
+    // default, and the error was "stream did not contain valid UTF-8").
+    let text = String::from_utf8(bytes).map_err(|_| Error::Mesh {
+        file: path.to_path_buf(),
+        line: 1,
+        problem: "not text: a binary .msh (or another binary file); save it as gmsh 4.1 ASCII (gmsh: Mesh.Binary = 0; meshio: meshio.write(path, mesh, file_format=\"gmsh\", binary=False))".into(),
     })?;
     let mut mesh = parse(path, &text)?;
     mesh.digest = Some(super::digest(text.as_bytes()));
@@ -121,7 +128,7 @@ pub fn parse(path: &Path, text: &str) -> Result<Mesh> {
                 }
                 if v[1] != "0" {
                     return Err(
-                        ln.err("binary .msh is not supported: save as ASCII (Mesh.Binary = 0)")
+                        ln.err("binary .msh is not supported: save as ASCII (gmsh: Mesh.Binary = 0; meshio: binary=False)")
                     );
                 }
                 seen_format = true;

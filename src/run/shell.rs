@@ -86,7 +86,8 @@ pub struct RunReport {
     /// What the user should know of the path beyond its events: a
     /// secondary branch asked for and not found; the critical points a
     /// Newton run's steps bracket by their inertia (not located).
-    #[serde(skip_serializing_if = "Vec::is_empty")]
+    /// Always present, empty when there is nothing to say (review 18: a
+    /// stopped run's summary.json had no `notes` key).
     pub notes: Vec<String>,
     /// Contact pairs that changed side of their law's switch between step
     /// ends, summed over the run (steps.csv `contact_switches`): a row of

@@ -84,7 +84,8 @@ pub struct ShellReferenceReport {
     pub columns: Vec<String>,
     pub output_rows: usize,
     pub end: IndexMap<String, f64>,
-    #[serde(skip_serializing_if = "Vec::is_empty")]
+    /// Always present, empty when there is nothing to say (review 18: a
+    /// stopped run's summary.json had no `notes` key).
     pub notes: Vec<String>,
 }
 

@@ -85,7 +85,8 @@ pub struct TimeReport {
     pub events: Vec<TimeEvent>,
     /// What the user should know about the answers (e.g. friction nodes
     /// whose stick/slip state the regularization decides).
-    #[serde(skip_serializing_if = "Vec::is_empty")]
+    /// Always present, empty when there is nothing to say (review 18: a
+    /// stopped run's summary.json had no `notes` key).
     pub notes: Vec<String>,
 }
 
