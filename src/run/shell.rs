@@ -1071,6 +1071,15 @@ fn run_inner(
                     stats.round_off_stops, cfg.residual_tol, stats.round_off_residual
                 ));
             }
+            // Review 17: E in MPa in an m scene gave the linear method a
+            // 65.7 m deflection of a 1 m plate, unnoted.
+            let moved = model.largest_translation(&full_last);
+            if method_name == "linear" && moved > LINEAR_RANGE * model.length_scale {
+                notes.push(format!(
+                    "the linear method's largest displacement, {moved:.3e}, is {:.1} times the model's size: far outside the small displacements it assumes; check the units (e.g. young in MPa in a scene in m) or follow the path with method = \"anm\"",
+                    moved / model.length_scale
+                ));
+            }
             notes.extend(regularization::pull_note(&model, &full_last, lambda_last));
             notes.extend(regularization::sink_note(
                 &model,
@@ -1304,6 +1313,10 @@ fn critical_points(
         }
     }
 }
+
+/// Displacements above this share of the model's size are outside the
+/// linear method's range.
+const LINEAR_RANGE: f64 = 0.1;
 
 /// Geometric estimates of consecutive steps this close (relative) are one
 /// point.

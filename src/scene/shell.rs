@@ -838,6 +838,14 @@ pub fn load(path: &Path) -> Result<ShellScene> {
             far / size
         ));
     }
+    // Review 17: a 10 m thickness on a 1 m plate (a unit slip) ran.
+    if thickness > THICK * size {
+        warnings.push(format!(
+            "{}: shell.thickness = {thickness:e} is {:.2} times the model's size {size:.3e}: a shell model needs a thickness well below its span; check the units",
+            path.display(),
+            thickness / size
+        ));
+    }
     let probes = probes(
         &ctx,
         &raw.probe,
@@ -2007,6 +2015,9 @@ fn moving_away(
     }
     out
 }
+
+/// A thickness above this share of the model's size is no shell.
+const THICK: f64 = 0.25;
 
 fn axis_of(s: &str) -> Option<usize> {
     match s {

@@ -955,3 +955,65 @@ fn an_obstacle_that_only_moves_away_from_the_shell_is_warned_of() {
         "{w}"
     );
 }
+
+/// Review 17: a unit slip (thickness 10 on a 1 m plate, E in MPa in a
+/// scene in m) ran without a word. The thickness is warned of at load;
+/// the linear method's displacement beyond 0.1 of the model's size is
+/// noted after the run, and not at a small load.
+#[test]
+fn unit_slips_in_thickness_and_modulus_are_named() {
+    let text = |thickness: f64, young: f64, method: &str| {
+        format!(
+            r#"[scene]
+kind = "shell"
+[mesh]
+type = "rectangle"
+x = [0.0, 1.0]
+y = [0.0, 0.1]
+divisions = [8, 1]
+[material]
+young = {young:e}
+poisson = 0.3
+[shell]
+thickness = {thickness:e}
+[[fix]]
+group = "s0"
+clamp = true
+[[load]]
+edge = "s1"
+line_force = [0.0, 0.0, -10.0]
+[solver]
+method = "{method}"
+lambda_end = 1.0
+[output]
+lambda_step = 1.0
+vtk_every = 0
+plot = false
+"#
+        )
+    };
+    let thick = ScratchFile::with_text("unit-slips", "thick.toml", &text(10.0, 2e11, "anm"));
+    let w = load(&thick).unwrap().warnings.join("\n");
+    assert!(
+        w.contains("shell.thickness") && w.contains("check the units"),
+        "{w}"
+    );
+    let fine = ScratchFile::with_text("unit-slips", "fine.toml", &text(0.01, 2e11, "linear"));
+    let sc = load(&fine).unwrap();
+    assert!(sc.warnings.is_empty(), "{:?}", sc.warnings);
+    let r = anm::run::run_loaded(&sc, None, false).unwrap();
+    assert!(
+        !r.notes.iter().any(|n| n.contains("linear method")),
+        "{:?}",
+        r.notes
+    );
+    let mpa = ScratchFile::with_text("unit-slips", "mpa.toml", &text(0.01, 2e5, "linear"));
+    let r = anm::run::run_loaded(&load(&mpa).unwrap(), None, false).unwrap();
+    assert!(
+        r.notes
+            .iter()
+            .any(|n| n.contains("linear method") && n.contains("units")),
+        "{:?}",
+        r.notes
+    );
+}
