@@ -444,6 +444,12 @@ impl<'s> Recorder<'s> {
                 .map(|(a, b)| Vec3::new(a[0] + b[0], a[1] + b[1], a[2] + b[2]))
                 .collect();
         let mesh = &self.scene.mesh;
+        let mut cells = vec![PointData::Tags("element", &mesh.quad_tags)];
+        cells.extend(super::section::stress_cells(
+            model,
+            full,
+            self.scene.thickness,
+        ));
         write_vtu_cells(
             &d.join(name),
             &x,
@@ -455,7 +461,7 @@ impl<'s> Recorder<'s> {
                 PointData::Scalar("contact_reaction", s.reaction),
                 PointData::Tags("node", &mesh.node_tags),
             ],
-            &[PointData::Tags("element", &mesh.quad_tags)],
+            &cells,
         )?;
         self.state.pvd.push((lambda, 0, name.to_string()));
         Ok(())

@@ -80,3 +80,26 @@ pub fn membrane_stress(
         max: mean + radius,
     }
 }
+
+/// The membrane stresses of every element as VTK cell data: along and
+/// across the element's η direction, shear, principal min and max
+/// (friction.vtu, shell_NNNN.vtu and shell_final.vtu; review 19: the static
+/// outputs had no stresses).
+pub fn stress_cells(
+    model: &ShellModel,
+    full: &[f64],
+    thickness: f64,
+) -> Vec<crate::output::vtk::PointData<'static>> {
+    use crate::output::vtk::PointData;
+    let stress: Vec<MembraneStress> = (0..model.elements.len())
+        .map(|e| membrane_stress(model, e, full, thickness))
+        .collect();
+    let cell = |f: fn(&MembraneStress) -> f64| stress.iter().map(f).collect();
+    vec![
+        PointData::Scalar("stress_along", cell(|m| m.along)),
+        PointData::Scalar("stress_across", cell(|m| m.across)),
+        PointData::Scalar("stress_shear", cell(|m| m.shear)),
+        PointData::Scalar("stress_min", cell(|m| m.min)),
+        PointData::Scalar("stress_max", cell(|m| m.max)),
+    ]
+}

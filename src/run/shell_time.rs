@@ -20,7 +20,6 @@
 use super::along_strip;
 use super::build::build_model;
 use super::probe::{self, State};
-use super::section::{MembraneStress, membrane_stress};
 use super::time_checkpoint::TimeCheckpoint;
 use crate::contact::Motion;
 use crate::error::{Error, Result};
@@ -733,10 +732,12 @@ fn write_fields(path: &Path, scene: &ShellScene, dae: &FrictionDae, s: &TimeSamp
     let speed = slip.iter().map(|v| v.norm()).collect();
     let areas = scene.mesh.node_areas();
     let pressure = rn.iter().zip(&areas).map(|(r, a)| r / a).collect();
-    let stress: Vec<_> = (0..scene.mesh.quads.len())
-        .map(|e| membrane_stress(&dae.model, e, &s.full, scene.thickness))
-        .collect();
-    let cell = |f: fn(&MembraneStress) -> f64| stress.iter().map(f).collect();
+    let mut cells = vec![PointData::Tags("element", &scene.mesh.quad_tags)];
+    cells.extend(super::section::stress_cells(
+        &dae.model,
+        &s.full,
+        scene.thickness,
+    ));
     write_vtu_cells(
         path,
         &x,
@@ -751,14 +752,7 @@ fn write_fields(path: &Path, scene: &ShellScene, dae: &FrictionDae, s: &TimeSamp
             PointData::Scalar("stick", stick),
             PointData::Tags("node", &scene.mesh.node_tags),
         ],
-        &[
-            PointData::Tags("element", &scene.mesh.quad_tags),
-            PointData::Scalar("stress_along", cell(|m| m.along)),
-            PointData::Scalar("stress_across", cell(|m| m.across)),
-            PointData::Scalar("stress_shear", cell(|m| m.shear)),
-            PointData::Scalar("stress_min", cell(|m| m.min)),
-            PointData::Scalar("stress_max", cell(|m| m.max)),
-        ],
+        &cells,
     )
 }
 

@@ -80,3 +80,67 @@ fn membrane_stresses_follow_hookes_law_in_plane_strain_along_y() {
     );
     assert!(worst < 1e-9, "{worst}");
 }
+
+/// Review 19: the static VTK outputs carried no stress. shell_final.vtu now
+/// has the membrane stresses per element: a strip pulled along its η axis
+/// (y) by q per unit width (ν = 0, strain 5e-5) carries q / t in every
+/// element, to the strain's order (the second Piola–Kirchhoff stress is
+/// the nominal one over the stretch).
+#[test]
+fn the_final_vtk_file_carries_the_membrane_stresses() {
+    let (q, t) = (1e4, 1e-3);
+    let text = format!(
+        r#"[scene]
+kind = "shell"
+[mesh]
+type = "rectangle"
+x = [0.0, 0.1]
+y = [0.0, 1.0]
+divisions = [2, 6]
+[material]
+young = 2e11
+poisson = 0.0
+[shell]
+thickness = {t:e}
+[[fix]]
+group = "t0"
+clamp = true
+[[load]]
+edge = "t1"
+line_force = [0.0, {q:e}, 0.0]
+[solver]
+lambda_end = 1.0
+[output]
+lambda_step = 1.0
+vtk_every = 0
+plot = false
+"#
+    );
+    let file = crate::scratch::ScratchFile::with_text("vtk-stress", "strip.toml", &text);
+    let dir = crate::scratch::scratch("vtk-stress-out");
+    let scene = load(&file).expect("scene");
+    anm::run::run_loaded(&scene, Some(dir.path()), false).expect("run");
+    let vtu = std::fs::read_to_string(dir.path().join("shell_final.vtu")).expect("vtu");
+    let at = vtu
+        .find(r#"Name="stress_along""#)
+        .expect("a stress_along cell array");
+    let values: Vec<f64> = vtu[at..]
+        .lines()
+        .skip(1)
+        .take_while(|l| !l.contains("</DataArray>"))
+        .flat_map(|l| {
+            l.split_whitespace()
+                .map(|v| v.parse::<f64>().unwrap())
+                .collect::<Vec<_>>()
+        })
+        .collect();
+    assert_eq!(values.len(), 12);
+    let expected = q / t;
+    for v in &values {
+        assert!((v / expected - 1.0).abs() < 1e-3, "{v} against {expected}");
+    }
+    println!(
+        "stress_along: {:?} against q / t = {expected:e}",
+        &values[..3]
+    );
+}
