@@ -44,6 +44,10 @@ pub struct TimeRunRecord {
     /// an empty message for runs stopped by numerical trouble).
     #[serde(default)]
     pub stop_message: Option<String>,
+    /// The time the run stopped (t_end at the end): on a breakaway scene
+    /// the answer itself (review 18: every audit row was NaN there).
+    #[serde(default)]
+    pub stop_t: Option<f64>,
 }
 
 /// One item: a parameter value and its run, or the error that stopped it.
@@ -62,6 +66,8 @@ pub struct TimeAuditRow {
     pub value: f64,
     /// "end", "singularity", or "error" (the message says why).
     pub stop: String,
+    /// When the run stopped (NaN for an error before any step).
+    pub t_stop: f64,
     pub message: Option<String>,
     /// The key probe and rn_total at t_end (NaN if not reached).
     pub key: f64,
@@ -149,6 +155,7 @@ pub fn run_item(parameter: &str, value: f64, scene: &ShellScene) -> TimeAuditIte
                 Some(t) => format!("stop at t = {t:e} s: {m}"),
                 None => m,
             }),
+            stop_t: r.stop.t,
         }),
         Ok(Err(e)) => Err(e.to_string()),
         Err(panic) => Err(format!("panicked: {panic}")),
@@ -228,6 +235,7 @@ pub fn rows(scene: &ShellScene, items: &[TimeAuditItem]) -> Vec<TimeAuditRow> {
                         parameter: name.to_string(),
                         value: it.value,
                         stop: r.stop.clone(),
+                        t_stop: r.stop_t.unwrap_or(f64::NAN),
                         message: {
                             let parts: Vec<String> =
                                 r.stop_message.iter().chain(&r.notes).cloned().collect();
@@ -251,6 +259,7 @@ pub fn rows(scene: &ShellScene, items: &[TimeAuditItem]) -> Vec<TimeAuditRow> {
                     parameter: name.to_string(),
                     value: it.value,
                     stop: "error".into(),
+                    t_stop: f64::NAN,
                     message: Some(e.clone()),
                     key: f64::NAN,
                     key_deviation: f64::NAN,
@@ -295,15 +304,16 @@ pub fn markdown(scene: &ShellScene, rows: &[TimeAuditRow]) -> String {
             .map_or("none".into(), |z| format!("{z:e} N")),
     );
     s += &format!(
-        "| parameter | value | stop | {key}({t_end}) | deviation | rn_total({t_end}) (N) | deviation | slip_area({t_end}) (m²) | deviation | trajectory deviation | steps | factorizations | max residual | wall (s) | reference |\n"
+        "| parameter | value | stop | t_stop (s) | {key}({t_end}) | deviation | rn_total({t_end}) (N) | deviation | slip_area({t_end}) (m²) | deviation | trajectory deviation | steps | factorizations | max residual | wall (s) | reference |\n"
     );
-    s += "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+    s += "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
     for r in rows {
         s += &format!(
-            "| {} | {:e} | {} | {:.9e} | {:.2e} | {:.9e} | {:.2e} | {:.6e} | {:.2e} | {:.2e} | {} | {} | {:.1e} | {:.3} | {} |\n",
+            "| {} | {:e} | {} | {:.9e} | {:.9e} | {:.2e} | {:.9e} | {:.2e} | {:.6e} | {:.2e} | {:.2e} | {} | {} | {:.1e} | {:.3} | {} |\n",
             r.parameter,
             r.value,
             r.stop,
+            r.t_stop,
             r.key,
             r.key_deviation,
             r.contact,
@@ -347,6 +357,7 @@ pub fn write(scene: &ShellScene, rows: &[TimeAuditRow], dir: &Path) -> Result<()
         "parameter",
         "value",
         "stop",
+        "t_stop",
         "key",
         "key_deviation",
         "rn_total",
@@ -366,6 +377,7 @@ pub fn write(scene: &ShellScene, rows: &[TimeAuditRow], dir: &Path) -> Result<()
             r.parameter.clone(),
             format!("{:e}", r.value),
             r.stop.clone(),
+            format!("{:e}", r.t_stop),
             format!("{:e}", r.key),
             format!("{:e}", r.key_deviation),
             format!("{:e}", r.contact),
