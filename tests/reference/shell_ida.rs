@@ -12,15 +12,20 @@ use anm::run::shell_time;
 use anm::scene::shell::load;
 use anm::shell::time_path::Stepping;
 
-fn coarse_capstan(name: &str) -> anm::scene::shell::ShellScene {
-    let text = std::fs::read_to_string("scenes/strip-capstan.toml").expect("scene");
-    let text = text
+/// scenes/strip-capstan.toml with a 90° wrap on 8 elements.
+fn coarse_capstan_text() -> String {
+    std::fs::read_to_string("scenes/strip-capstan.toml")
+        .expect("scene")
         .replace("angle = [0.0, 180.0]", "angle = [0.0, 90.0]")
         .replace("divisions = [1, 64]", "divisions = [1, 8]")
         .replace(
             "line_force = [0.0, -400.0, 0.0]",
             "line_force = [0.0, 0.0, -400.0]",
-        );
+        )
+}
+
+fn coarse_capstan(name: &str) -> anm::scene::shell::ShellScene {
+    let text = coarse_capstan_text();
     let path = crate::scratch::ScratchFile::with_text("shell-ida", &format!("{name}.toml"), &text);
     load(&path).expect("scene loads")
 }
@@ -219,14 +224,7 @@ fn anm(args: &[&str]) -> std::process::Output {
 /// error). summary.json has the common counters and `stop.reason` "end".
 #[test]
 fn anm_reference_ida_checks_a_shell_run_in_time_from_the_command_line() {
-    let text = std::fs::read_to_string("scenes/strip-capstan.toml").expect("scene");
-    let text = text
-        .replace("angle = [0.0, 180.0]", "angle = [0.0, 90.0]")
-        .replace("divisions = [1, 64]", "divisions = [1, 8]")
-        .replace(
-            "line_force = [0.0, -400.0, 0.0]",
-            "line_force = [0.0, 0.0, -400.0]",
-        );
+    let text = coarse_capstan_text();
     let scene = crate::scratch::ScratchFile::with_text("shell-ida-cli", "capstan.toml", &text);
     let runs = crate::scratch::scratch("shell-ida-cli-runs");
     let (anm_dir, ida_dir) = (runs.path().join("anm"), runs.path().join("ida"));

@@ -829,14 +829,11 @@ fn a_contact_probe_off_the_candidates_is_refused() {
     );
 }
 
-/// Review 5: a model far from the origin loses accuracy (strains from
-/// absolute positions) and a 1 m model 1 km away failed to converge: the
-/// scene is warned about.
-#[test]
-fn a_model_far_from_the_origin_is_warned_about() {
-    let text = |x0: f64| {
-        format!(
-            r#"[scene]
+/// A 1 m cantilever (4 × 1 elements) starting at x0, clamped on s0, with a
+/// unit force on the nodes of `loaded`.
+fn small_cantilever(x0: f64, loaded: &str) -> String {
+    format!(
+        r#"[scene]
 kind = "shell"
 [mesh]
 type = "rectangle"
@@ -852,16 +849,23 @@ thickness = 0.01
 group = "s0"
 clamp = true
 [[load]]
-group = "s1"
+group = "{loaded}"
 force = [0.0, 0.0, 1.0]
 [solver]
 lambda_end = 1.0
 [output]
 lambda_step = 0.5
 "#,
-            x0 + 1.0
-        )
-    };
+        x0 + 1.0
+    )
+}
+
+/// Review 5: a model far from the origin loses accuracy (strains from
+/// absolute positions) and a 1 m model 1 km away failed to converge: the
+/// scene is warned about.
+#[test]
+fn a_model_far_from_the_origin_is_warned_about() {
+    let text = |x0: f64| small_cantilever(x0, "s1");
     let near = ScratchFile::with_text("far-origin", "near.toml", &text(10.0));
     assert!(load(&near).unwrap().warnings.is_empty());
     let far = ScratchFile::with_text("far-origin", "far.toml", &text(1000.0));
@@ -895,33 +899,7 @@ fn anm_correction_keys_are_refused_with_newton() {
 /// free edge is not.
 #[test]
 fn a_load_on_fixed_translations_only_is_warned_of() {
-    let text = |group: &str| {
-        format!(
-            r#"[scene]
-kind = "shell"
-[mesh]
-type = "rectangle"
-x = [0.0, 1.0]
-y = [0.0, 0.1]
-divisions = [4, 1]
-[material]
-young = 1e9
-poisson = 0.3
-[shell]
-thickness = 0.01
-[[fix]]
-group = "s0"
-clamp = true
-[[load]]
-group = "{group}"
-force = [0.0, 0.0, 1.0]
-[solver]
-lambda_end = 1.0
-[output]
-lambda_step = 0.5
-"#
-        )
-    };
+    let text = |group: &str| small_cantilever(0.0, group);
     let free = ScratchFile::with_text("load-on-fixed", "free.toml", &text("s1"));
     assert!(load(&free).unwrap().warnings.is_empty());
     let held = ScratchFile::with_text("load-on-fixed", "held.toml", &text("s0"));
