@@ -37,7 +37,11 @@ pub fn pull_note(model: &ShellModel, full: &[f64], lambda: f64) -> Option<String
         nodes.dedup();
         nodes.len()
     };
-    let pull = candidates as f64 * eta;
+    // Each (node, obstacle) pair has its own eq. (3) and pulls up to eta
+    // (review 21: a strip over two cylinders counted 82 nodes for its 164
+    // pairs, half the capacity).
+    let pairs = model.pairs.len();
+    let pull = pairs as f64 * eta;
     let loads = lambda.abs() * model.dead.iter().map(|f| f.abs()).sum::<f64>();
     let contact: f64 = model
         .contact_forces(full, lambda)
@@ -50,7 +54,7 @@ pub fn pull_note(model: &ShellModel, full: &[f64], lambda: f64) -> Option<String
     };
     (pull > PULL * reference && reference > 0.0).then(|| {
         format!(
-            "contact.eta = {eta:e} per candidate: its {candidates} candidates can pull up to {pull:.3e} in all, {:.2e} times the {what} {reference:.3e} (the sum of their magnitudes at the end): eq. (3)'s regularization may carry much of the answer; `anm audit --eta` measures how much",
+            "contact.eta = {eta:e} per candidate and obstacle: its {pairs} pairs ({candidates} candidate nodes) can pull up to {pull:.3e} in all, {:.2e} times the {what} {reference:.3e} (the sum of their magnitudes at the end): eq. (3)'s regularization may carry much of the answer; `anm audit --eta` measures how much",
             pull / reference
         )
     })

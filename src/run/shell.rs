@@ -1024,6 +1024,42 @@ fn run_inner(
                 cfg.lambda_end,
             ));
             notes.extend(without_inertia(stats.linear.symmetric_without_inertia));
+            // Review 21: a column run past its buckling load ended on the
+            // unstable straight branch with exit 0 and no word.
+            // (Newton's runs name the pivots their increments bracket.)
+            if let (true, Some(n)) = (ended, stats.linear.negative_pivots)
+                && n > 0
+                && method_name == "anm"
+                && rec.state.switched_at.is_none()
+            {
+                notes.push(format!(
+                    "the state at lambda_end has {n} negative pivots: it is unstable (the path went on along its branch past a bifurcation or a limit point, see events); a real structure leaves it there: solver.branch = \"secondary\" follows the bifurcated branch"
+                ));
+            }
+            // Review 21: E = 2e3 in a scene in m gave 32 % strain, unnoted
+            // (right for that input, but a unit slip most likely).
+            let strain = (0..model.elements.len())
+                .map(|e| {
+                    let m = super::section::membrane_stress(&model, e, &full_last, scene.thickness);
+                    m.min.abs().max(m.max.abs())
+                })
+                .fold(0.0, f64::max)
+                / scene.material.young;
+            if strain > LARGE_STRAIN {
+                notes.push(format!(
+                    "membrane strains reach about {:.0} % (stress / young): the material law (St Venant–Kirchhoff) is meant for moderate strains; if these are not intended, check the units of material.young and of the loads",
+                    100.0 * strain
+                ));
+            }
+            // Review 21: at t = 1e-6 L the ANM stopped on "no convergence"
+            // and nothing pointed to the thickness.
+            let slender = scene.thickness / scene.mesh.size();
+            if matches!(stop, PathStop::Failed(_)) && slender < THIN {
+                notes.push(format!(
+                    "thickness / model size = {slender:.1e}: the bending stiffness is (t/L)² = {:.1e} of the membrane's, near the round-off of the residual, which may be why the run stopped; a thicker shell (or a smaller model) is better conditioned",
+                    slender * slender
+                ));
+            }
             let near_start = rec
                 .state
                 .events
@@ -1193,7 +1229,7 @@ const CRAWL_STEPS: usize = 50;
 fn crawl_diagnosis(scene: &ShellScene, step: &PathStep, first: f64, steps: usize) -> String {
     let hint = match &scene.contact {
         Some(ct) if ct.eta == 0.0 => format!(
-            "; under the penalty law (contact.eta = 0) with contact.k = {:e}, K times the round-off of a gap exceeds the force tolerance at the law's kink, where a node first touches: a smaller contact.k, or contact.eta > 0 (its switch is smooth), lets the path past",
+            "; under the penalty law (contact.eta = 0) with contact.k = {:e}, K times the round-off of a gap exceeds the force tolerance at the law's kink, where a node first touches: contact.eta > 0 (its switch is smooth) lets the path past; another contact.k may too, in no simple direction (review 21: on one cantilever 1e8 N/mm stalled where 3e8 and 1e9 ran, on another 1e9 stalled where 1e8 ran)",
             ct.k
         ),
         _ => "; the path may be at a point it cannot pass at this solver.residual_tol (a larger one may), or at a kink of a law".into(),
@@ -1313,6 +1349,13 @@ fn critical_points(
         }
     }
 }
+
+/// Membrane strains above this are outside the material law's range.
+const LARGE_STRAIN: f64 = 0.1;
+
+/// A thickness below this share of the model's size makes the bending
+/// stiffness (t/L)² ≤ 1e-9 of the membrane's.
+const THIN: f64 = 3e-5;
 
 /// Displacements above this share of the model's size are outside the
 /// linear method's range.

@@ -1939,6 +1939,14 @@ fn loads_on_fixed_dofs(
                 // A couple acts on the rotations (the director).
                 Load::Moment { .. } => return None,
             };
+            // A zero load is its own warning (review 21: force = [0, 0, 0]
+            // was told it acts on fixed translations).
+            if direction.is_some_and(|f| f.norm() == 0.0) {
+                return Some(format!(
+                    "{}: load[{i}] is zero: it loads nothing",
+                    path.display()
+                ));
+            }
             (!nodes.is_empty() && !nodes.iter().any(|&n| takes(n, direction))).then(|| {
                 format!(
                     "{}: load[{i}] acts on fixed translations only ({}, every loaded direction held by a [[fix]]): it goes straight into the supports and does not load the shell; apply it to free nodes",

@@ -902,6 +902,15 @@ fn a_load_on_fixed_translations_only_is_warned_of() {
     let text = |group: &str| small_cantilever(0.0, group);
     let free = ScratchFile::with_text("load-on-fixed", "free.toml", &text("s1"));
     assert!(load(&free).unwrap().warnings.is_empty());
+    // Review 21: a zero force was told it acts on fixed translations.
+    let zero =
+        small_cantilever(0.0, "s1").replace("force = [0.0, 0.0, 1.0]", "force = [0.0, 0.0, 0.0]");
+    let zero = ScratchFile::with_text("load-on-fixed", "zero.toml", &zero);
+    let w = load(&zero).unwrap().warnings.join("\n");
+    assert!(
+        w.contains("load[0] is zero") && !w.contains("fixed translations"),
+        "{w}"
+    );
     let held = ScratchFile::with_text("load-on-fixed", "held.toml", &text("s0"));
     let w = load(&held).unwrap().warnings.join("\n");
     assert!(

@@ -124,3 +124,42 @@ fn a_path_wandering_about_the_unloaded_state_is_noted_and_bounded() {
         .count();
     assert!(modes <= 50, "{modes} mode files");
 }
+
+/// Review 21: numerical trouble that the data explain is named by the
+/// run's notes. A cantilever 1e-6 of its length thick stops (its bending
+/// stiffness is 1e-12 of the membrane's) with a note on the thickness; an
+/// Euler column run past its buckling load on the primary branch ends
+/// with a note that its end state is unstable; the ring inflated to a
+/// stretch of 1.1596 notes its strain, about the closed form's Green strain
+/// (l² − 1)/2 = 17 %.
+#[test]
+fn the_notes_name_what_the_data_make_hard_or_unusual() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let run = |p: &str| {
+        run_loaded(
+            &anm::scene::shell::load(&root.join(p)).expect("scene"),
+            None,
+            false,
+        )
+        .expect("run")
+    };
+    let has = |r: &anm::run::RunReport, text: &str| r.notes.iter().any(|n| n.contains(text));
+    let thin = run("tests/data/thin-cantilever.toml");
+    assert_ne!(thin.stop.reason, "end");
+    assert!(
+        has(&thin, "thickness / model size = 1.0e-6"),
+        "{:?}",
+        thin.notes
+    );
+    let column = run("scenes/verification/euler-column.toml");
+    assert_eq!(column.stop.reason, "end");
+    assert!(has(&column, "it is unstable"), "{:?}", column.notes);
+    let ring = run("scenes/verification/ring-pressure-dead.toml");
+    let l: f64 = 1.159639;
+    let green = 100.0 * (l * l - 1.0) / 2.0;
+    assert!(
+        has(&ring, &format!("about {green:.0} %")),
+        "{green:.1}: {:?}",
+        ring.notes
+    );
+}
