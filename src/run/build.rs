@@ -110,9 +110,16 @@ pub fn build_model(scene: &ShellScene) -> Result<ShellModel> {
                 file: scene.file.clone(),
                 key: format!("obstacle[{ob}]"),
                 problem: format!(
-                    "contact node {} at {:?} has initial gap {h0:e}: eq. (3) needs delta = h0 > 0 (the node starts on or inside the obstacle){}",
+                    "contact node {} at {:?} has initial gap {h0:e}: {}{}",
                     scene.mesh.node_tags[node],
                     scene.mesh.nodes[node].as_slice(),
+                    // Review 21: the penalty law has no delta; what both
+                    // laws need is an unloaded start off the obstacle.
+                    if ct.eta == 0.0 {
+                        "the penalty law's series steps start off its kink (h = 0) and the unloaded shell must not be inside the obstacle: give the candidates a small initial gap (move the obstacle off by ~1e-6 of the model's size)"
+                    } else {
+                        "eq. (3) needs delta = h0 > 0 (the node starts on or inside the obstacle): give the candidates a small initial gap (move the obstacle off by ~1e-6 of the model's size)"
+                    },
                     // Review 10: an off-centre crown gave this message
                     // with no word of the crown.
                     match scene.obstacles[ob].shape {
