@@ -263,8 +263,9 @@ enum ReferenceSolver {
         /// Relative tolerance.
         #[arg(long, default_value_t = 1e-10, allow_hyphen_values = true)]
         rtol: f64,
-        /// Absolute tolerance of the differential unknowns (positions, m);
-        /// default: rtol.
+        /// Absolute tolerance of the differential unknowns (positions);
+        /// default: rtol on a point-mass scene (m), rtol × the model's
+        /// length scale on a shell scene (its length unit).
         #[arg(long, allow_hyphen_values = true)]
         atol: Option<f64>,
         /// The algebraic unknowns (velocities, forces; u_y on the plane) in

@@ -19,6 +19,13 @@ impl Tolerances {
     pub fn new(rtol: f64, atol: Option<f64>) -> Result<Self, IdaError> {
         let atol = atol.unwrap_or(rtol);
         positive("rtol", rtol)?;
+        // Review 20: 2 and 1e-20 were accepted (the first tests nothing,
+        // the second asks below the double's resolution).
+        if !(1e-15..1.0).contains(&rtol) {
+            return Err(IdaError::Input(format!(
+                "--rtol must lie in [1e-15, 1), got {rtol:e}"
+            )));
+        }
         positive("atol", atol)?;
         Ok(Self { rtol, atol })
     }
@@ -138,6 +145,8 @@ mod tests {
             (0.0, None, "--rtol"),
             (-1e-8, None, "--rtol"),
             (f64::NAN, Some(1e-8), "--rtol"),
+            (2.0, None, "--rtol"),
+            (1e-20, None, "--rtol"),
             (1e-8, Some(f64::INFINITY), "--atol"),
             (1e-8, Some(-1.0), "--atol"),
         ] {

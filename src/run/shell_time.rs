@@ -560,7 +560,8 @@ fn report(
         && amplitude > along_strip::ALTERNATION
     {
         report.notes.push(format!(
-            "the contact pressure alternates from row to row inside a contact zone at t = {stop_t} (s = {:.4} to {:.4}, away from its edges): {lo:.4e} to {hi:.4e} around a mean of {mean:.4e}, up to ±{:.0} % of it (along.csv, friction.csv, friction.vtu); per-node pressures there are not resolved, while totals, tensions and two-row means are: read the pressure as two-row means (docs/shell-friction.md, a strip moved along its path)",
+            "the contact pressure alternates from row to row inside a contact zone at t = {} (s = {:.4} to {:.4}, away from its edges): {lo:.4e} to {hi:.4e} around a mean of {mean:.4e}, up to ±{:.0} % of it (along.csv, friction.csv, friction.vtu); per-node pressures there are not resolved, while totals, tensions and two-row means are: read the pressure as two-row means (docs/shell-friction.md, a strip moved along its path)",
+            last.t,
             s[0],
             s[1],
             100.0 * amplitude
@@ -583,9 +584,10 @@ fn report(
             .max_by(|a, b| a.force.norm().total_cmp(&b.force.norm()))
         {
             report.notes.push(format!(
-                "{} of {} friction nodes stick at t = {stop_t} while carrying friction (up to {:.3e} at node {}, {:.2} of f R_N there): a sticking contact keeps the friction the load history put on it and sheds it only by the regularized creep, so these forces, and the tensions they hold, depend on friction.load_ramp and on friction.omega (docs/shell-friction.md); where this friction is not meant to hold them (an idler roller that should pass the tension unchanged), the roller's surface speed must differ from the strip's, or omega and t_end must let the creep finish",
+                "{} of {} friction nodes stick at t = {} while carrying friction (up to {:.3e} at node {}, {:.2} of f R_N there): a sticking contact keeps the friction the load history put on it and sheds it only by the regularized creep, so these forces, and the tensions they hold, depend on friction.load_ramp and on friction.omega (docs/shell-friction.md); where this friction is not meant to hold them (an idler roller that should pass the tension unchanged), the roller's surface speed must differ from the strip's, or omega and t_end must let the creep finish",
                 held.len(),
                 last.friction.len(),
+                last.t,
                 most.force.norm(),
                 dae.model.node_tag(most.node),
                 most.force.norm() / (law.f * most.rn.abs()).max(f64::MIN_POSITIVE)
@@ -607,9 +609,10 @@ fn report(
             .filter(|_| !breakaway)
         {
             report.notes.push(format!(
-                "{} of {} friction nodes at t = {stop_t} slip at speeds between omega Vc = {:.3e} and 10 omega Vc = {:.3e} (up to {fastest:.3e}): `transition` in friction.csv (0.5 in friction.vtu's stick), where the regularization, not the mechanics, decides stick or slip; a friction.omega below {:.1e} separates them",
+                "{} of {} friction nodes at t = {} slip at speeds between omega Vc = {:.3e} and 10 omega Vc = {:.3e} (up to {fastest:.3e}): `transition` in friction.csv (0.5 in friction.vtu's stick), where the regularization, not the mechanics, decides stick or slip; a friction.omega below {:.1e} separates them",
                 speeds.len(),
                 last.friction.len(),
+                last.t,
                 law.omega * law.vc,
                 slip_threshold(&law),
                 fastest / (10.0 * law.vc)
