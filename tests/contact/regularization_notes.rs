@@ -44,10 +44,11 @@ fn regularizations_that_carry_the_answer_are_noted() {
         "{:?}",
         r.notes
     );
-    // 63 candidates x 1e3 N of possible pull against 3 x 10 N of load.
+    // 63 candidates (one obstacle: 63 pairs) x 1e3 N of possible pull
+    // against 3 x 10 N of load.
     let (_, note) = noted(&[("eta = 1e-6", "eta = 1e3")], "contact.eta");
     assert!(
-        note.contains("63 candidates") && note.contains("6.300e4"),
+        note.contains("63 pairs (63 candidate nodes)") && note.contains("6.300e4"),
         "{note}"
     );
     // K = 10 N/m: the end's reactions (~1 N per node) sink nodes by ~0.1 m.
