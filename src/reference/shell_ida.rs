@@ -48,11 +48,6 @@ pub struct ShellIda {
 pub struct ShellIdaRun {
     /// (t, full dof vector) at each output time.
     pub samples: Vec<(f64, Vec<f64>)>,
-    pub steps: i64,
-    pub residual_evals: i64,
-    pub jacobian_evals: i64,
-    pub error_test_fails: i64,
-    pub nonlinear_conv_fails: i64,
     pub wall_s: f64,
     /// The DAE's state at each output time (aligned with `samples`).
     pub states: Vec<TimeState>,
@@ -221,11 +216,6 @@ impl ShellIda {
         let c = ida.counters();
         Ok(ShellIdaRun {
             samples,
-            steps: c.steps,
-            residual_evals: c.residual_evals,
-            jacobian_evals: c.jacobian_evals,
-            error_test_fails: c.error_test_fails,
-            nonlinear_conv_fails: c.nonlinear_conv_fails,
             wall_s: start.elapsed().as_secs_f64(),
             states,
             counters: c.common(),

@@ -372,19 +372,35 @@ pub fn rows(scene: &ShellScene, items: &[ShellAuditItem]) -> Result<Vec<ShellAud
 /// no value past the start is shared.
 pub(crate) fn grid_deviation(run: &[Vec<f64>], reference: &[Vec<f64>], col: usize) -> f64 {
     let same = |a: f64, b: f64| (a - b).abs() <= 1e-9 * a.abs().max(1.0);
-    let last_at =
-        |rows: &[Vec<f64>], x: f64| rows.iter().rev().find(|r| same(r[0], x)).map(|r| r[col]);
-    let start = run.first().map_or(f64::NAN, |r| r[0]);
-    let mut seen: Vec<f64> = vec![];
-    let mut pairs = vec![];
-    for row in run {
-        let x = row[0];
-        if same(x, start) || seen.iter().any(|&s| same(s, x)) {
-            continue;
+    // (x, the value of the last row at x), sorted by x: O(n log n), for
+    // histories of up to 1e6 rows.
+    let last_values = |rows: &[Vec<f64>]| -> Vec<(f64, f64)> {
+        let mut order: Vec<usize> = (0..rows.len()).collect();
+        order.sort_by(|&i, &j| rows[i][0].total_cmp(&rows[j][0]).then(i.cmp(&j)));
+        let mut out: Vec<(f64, f64, usize)> = vec![];
+        for i in order {
+            let x = rows[i][0];
+            match out.last_mut() {
+                Some(g) if same(g.0, x) => {
+                    if i > g.2 {
+                        (g.1, g.2) = (rows[i][col], i);
+                    }
+                }
+                _ => out.push((x, rows[i][col], i)),
+            }
         }
-        seen.push(x);
-        if let (Some(a), Some(b)) = (last_at(run, x), last_at(reference, x)) {
-            pairs.push((a, b));
+        out.into_iter().map(|(x, v, _)| (x, v)).collect()
+    };
+    let start = run.first().map_or(f64::NAN, |r| r[0]);
+    let (a, b) = (last_values(run), last_values(reference));
+    let mut pairs = vec![];
+    let mut k = 0;
+    for &(x, va) in a.iter().filter(|(x, _)| !same(*x, start)) {
+        while k < b.len() && b[k].0 < x && !same(b[k].0, x) {
+            k += 1;
+        }
+        if k < b.len() && same(b[k].0, x) {
+            pairs.push((va, b[k].1));
         }
     }
     if pairs.is_empty() {

@@ -54,11 +54,11 @@ fn anm_implicit_steps_agree_with_ida_on_the_shell_residual() {
         "coarse capstan: ANM {} steps, {} factorizations; IDA rtol 1e-10: {} steps, {} residuals, {} Jacobians, {} error-test and {} convergence failures, {:.2} s; max |u_anm - u_ida| / max |u_ida| = {diff:.2e}",
         run.stats.steps,
         run.stats.factorizations,
-        reference.steps,
-        reference.residual_evals,
-        reference.jacobian_evals,
-        reference.error_test_fails,
-        reference.nonlinear_conv_fails,
+        reference.counters.steps,
+        reference.counters.residual_evaluations,
+        reference.counters.jacobian_evaluations,
+        reference.counters.error_test_failures,
+        reference.counters.convergence_failures,
         reference.wall_s
     );
     assert!(diff <= 1e-6, "{diff}");
@@ -130,7 +130,7 @@ fn work_precision_on_the_coarse_capstan() {
                 let err = trajectory_difference(&r.samples, &reference.samples);
                 println!(
                     "| IDA | rtol {rtol:e} | {} | {:.3} | {err:.1e} |",
-                    r.steps, r.wall_s
+                    r.counters.steps, r.wall_s
                 );
             }
             Err(e) => println!("| IDA | rtol {rtol:e} | – | – | fails: {e} |"),
@@ -138,7 +138,7 @@ fn work_precision_on_the_coarse_capstan() {
     }
     println!(
         "| IDA (reference) | rtol 1e-12 | {} | {:.3} | – |",
-        reference.steps, reference.wall_s
+        reference.counters.steps, reference.wall_s
     );
 }
 
