@@ -6,7 +6,9 @@ use std::path::PathBuf;
 
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
-    #[error("{file}: cannot read: {source}")]
+    /// A file system error, reading or writing (review 23: a full disk
+    /// was reported as "cannot read"); the source says what failed.
+    #[error("{file}: {source}")]
     Io {
         file: PathBuf,
         #[source]

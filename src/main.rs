@@ -960,6 +960,8 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
             ignore_memory,
         } => {
             if let Some(dir) = resume {
+                // One run per folder (review 23: two runs mixed their files).
+                let _lock = anm::output::lock::OutputLock::take(&dir)?;
                 anm::run::interrupt::install();
                 if anm::run::time_checkpoint::TimeCheckpoint::is_in(&dir) {
                     let r = anm::run::shell_time::resume(&dir, !quiet)
@@ -983,6 +985,7 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
                         for w in &sc.warnings {
                             eprintln!("warning: {w}");
                         }
+                        let _lock = anm::output::lock::OutputLock::take(&out)?;
                         fresh_output(&out)?;
                         // Ctrl-C / SIGTERM end the run at the next step end
                         // with its outputs and a checkpoint (--resume).
@@ -1017,6 +1020,7 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
                             anm::linalg::mpi::ranks()
                         );
                     }
+                    let _lock = anm::output::lock::OutputLock::take(&out)?;
                     fresh_output(&out)?;
                     let report = anm::run::shell::run_loaded(&sc, Some(&out), !quiet)
                         .map_err(|e| running(e, &scene))?;
@@ -1027,6 +1031,7 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
                     // Ctrl-C / SIGTERM end the run at the next step end,
                     // with history.csv and steps.csv holding every step.
                     anm::run::interrupt::install();
+                    let _lock = anm::output::lock::OutputLock::take(&out)?;
                     fresh_output(&out)?;
                     let run = anm::model::friction_run::run(&sc, Some(&out), !quiet)
                         .map_err(|e| running(e, &scene))?;

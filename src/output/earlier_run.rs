@@ -27,6 +27,7 @@ const FIXED: &[&str] = &[
     "shell.pvd",
     "shell_final.vtu",
     "friction.vtu",
+    "tangent.mtx",
     "plot.svg",
     "history.svg",
     "steps.svg",
@@ -124,6 +125,8 @@ mod tests {
             "obstacle_0.vtu",
             "obstacle_1_1.000000.vtu",
             "checkpoint.json",
+            // Review 23: a plate's tangent stayed beside an Euler column's run.
+            "tangent.mtx",
         ] {
             assert!(is_run_output(name), "{name}");
         }
@@ -139,6 +142,8 @@ mod tests {
             "history.csv.bak",
             "buckle.json",
             "buckle_mode_12.vtu",
+            // Another run's lock is not an earlier run's file.
+            "anm.lock",
         ] {
             assert!(!is_run_output(name), "{name}");
         }

@@ -3,6 +3,7 @@
 pub mod earlier_run;
 #[cfg(feature = "hdf5")]
 pub mod hdf5;
+pub mod lock;
 pub mod mode;
 pub mod plot;
 pub mod vtk;

@@ -13,7 +13,6 @@ use crate::scene::shell::ShellScene;
 use crate::shell::ShellModel;
 use serde::{Deserialize, Serialize};
 use std::fs::{File, OpenOptions};
-use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
 
 /// The mid-surface at one lambda: per node, reference position,
@@ -237,12 +236,12 @@ fn open_csv(
     keep: Option<usize>,
 ) -> Result<(csv::Writer<File>, Vec<String>)> {
     if let Some(keep) = keep {
-        let f = File::open(path).map_err(io_err(path))?;
-        let lines: Vec<String> = BufReader::new(f)
-            .lines()
-            .take(keep + 1)
-            .collect::<std::io::Result<_>>()
-            .map_err(io_err(path))?;
+        let text = std::fs::read_to_string(path).map_err(io_err(path))?;
+        let whole: Vec<&str> = text.split_inclusive('\n').take(keep + 1).collect();
+        let lines: Vec<String> = whole
+            .iter()
+            .map(|l| l.trim_end_matches('\n').to_string())
+            .collect();
         if lines.len() != keep + 1 || lines[0] != header.join(",") {
             return Err(Error::Resume {
                 file: path.to_path_buf(),
@@ -252,6 +251,28 @@ fn open_csv(
                     header.join(",")
                 ),
             });
+        }
+        // Review 23: a last row cut mid-line (a file damaged from outside)
+        // passed the row count; the resumed run then appended to it and
+        // panicked at the end, leaving rn_D = 4.300 for 4.30065e-5. Every
+        // kept row is whole: ended by a newline, one number (or an empty
+        // cell) per column.
+        for (k, (line, raw)) in lines.iter().zip(&whole).enumerate().skip(1) {
+            let cells: Vec<&str> = line.split(',').collect();
+            let whole_row = raw.ends_with('\n')
+                && cells.len() == header.len()
+                && cells
+                    .iter()
+                    .all(|c| c.is_empty() || c.parse::<f64>().is_ok());
+            if !whole_row {
+                return Err(Error::Resume {
+                    file: path.to_path_buf(),
+                    problem: format!(
+                        "row {k} is not a whole row of {} numbers (cut or edited since the run stopped): `{line}`",
+                        header.len()
+                    ),
+                });
+            }
         }
         let mut text = lines.join("\n");
         text.push('\n');
@@ -449,6 +470,7 @@ impl<'s> Recorder<'s> {
             model,
             full,
             self.scene.thickness,
+            matches!(self.scene.method, crate::scene::shell::Method::Linear),
         ));
         write_vtu_cells(
             &d.join(name),

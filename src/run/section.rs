@@ -57,6 +57,27 @@ pub fn membrane_stress(
     full: &[f64],
     thickness: f64,
 ) -> MembraneStress {
+    in_element_frame(model, e, model.membrane_resultant(e, full) / thickness)
+}
+
+/// The membrane stresses of element `e` from the strain linear in the
+/// displacement, as the linear method's solution means them (review 22:
+/// the Green–Lagrange strain gave 934.02 where Hooke gives 933.33 on the
+/// membrane patch). The strain is exactly quadratic, E(u) = L u + Q(u, u),
+/// and the resultant linear in it, so L u = (E(u) − E(−u)) / 2.
+pub fn linear_membrane_stress(
+    model: &ShellModel,
+    e: usize,
+    full: &[f64],
+    thickness: f64,
+) -> MembraneStress {
+    let minus: Vec<f64> = full.iter().map(|x| -x).collect();
+    let n = (model.membrane_resultant(e, full) - model.membrane_resultant(e, &minus)) * 0.5;
+    in_element_frame(model, e, n / thickness)
+}
+
+/// A membrane stress tensor (global frame) along, across and principal.
+fn in_element_frame(model: &ShellModel, e: usize, n: nalgebra::Matrix3<f64>) -> MembraneStress {
     let el = &model.elements[e];
     let x: [Vec3; 4] = std::array::from_fn(|i| model.x0[el.nodes[i]]);
     let a_xi = (x[1] + x[2] - x[0] - x[3]) * 0.5;
@@ -64,7 +85,6 @@ pub fn membrane_stress(
     let along = a_eta.normalize();
     let normal = a_xi.cross(&a_eta).normalize();
     let across = along.cross(&normal);
-    let n = model.membrane_resultant(e, full) / thickness;
     let (a, b, c) = (
         along.dot(&(n * along)),
         across.dot(&(n * across)),
@@ -84,15 +104,21 @@ pub fn membrane_stress(
 /// The membrane stresses of every element as VTK cell data: along and
 /// across the element's η direction, shear, principal min and max
 /// (friction.vtu, shell_NNNN.vtu and shell_final.vtu; review 19: the static
-/// outputs had no stresses).
+/// outputs had no stresses); from the linear strain for the linear method.
 pub fn stress_cells(
     model: &ShellModel,
     full: &[f64],
     thickness: f64,
+    linear: bool,
 ) -> Vec<crate::output::vtk::PointData<'static>> {
     use crate::output::vtk::PointData;
+    let stress_of = if linear {
+        linear_membrane_stress
+    } else {
+        membrane_stress
+    };
     let stress: Vec<MembraneStress> = (0..model.elements.len())
-        .map(|e| membrane_stress(model, e, full, thickness))
+        .map(|e| stress_of(model, e, full, thickness))
         .collect();
     let cell = |f: fn(&MembraneStress) -> f64| stress.iter().map(f).collect();
     vec![

@@ -33,6 +33,9 @@ use std::time::Instant;
 #[derive(Clone, Debug, Serialize)]
 pub struct RunReport {
     pub scene: String,
+    /// `scene.description`, to tell runs apart (review 23: documented as
+    /// shown in outputs, it was in none).
+    pub description: Option<String>,
     /// The scene's kind ("shell"), as every summary.json has it.
     pub kind: &'static str,
     pub mesh: String,
@@ -974,6 +977,7 @@ fn run_inner(
         let _ = std::fs::remove_file(d.join("checkpoint.json"));
     }
     let report = RunReport {
+        description: scene.description.clone(),
         kind: "shell",
         scene: scene.file.display().to_string(),
         mesh: scene.mesh.file.display().to_string(),
@@ -1038,9 +1042,14 @@ fn run_inner(
             }
             // Review 21: E = 2e3 in a scene in m gave 32 % strain, unnoted
             // (right for that input, but a unit slip most likely).
+            let stress_of = if matches!(scene.method, Method::Linear) {
+                super::section::linear_membrane_stress
+            } else {
+                super::section::membrane_stress
+            };
             let strain = (0..model.elements.len())
                 .map(|e| {
-                    let m = super::section::membrane_stress(&model, e, &full_last, scene.thickness);
+                    let m = stress_of(&model, e, &full_last, scene.thickness);
                     m.min.abs().max(m.max.abs())
                 })
                 .fold(0.0, f64::max)
@@ -1134,7 +1143,9 @@ fn run_inner(
     };
     if let Some(d) = out_dir {
         write_json(&d.join("summary.json"), &report)?;
-        if !interrupted && scene.output.hdf5 {
+        // Interrupted too: the snapshots passed so far (review 23: the
+        // file appeared only after --resume, which rewrites it whole).
+        if scene.output.hdf5 {
             write_fields(&d.join("fields.h5"), scene, &report.snapshots)?;
         }
         // Interrupted too: the curves up to the last row (review 7).

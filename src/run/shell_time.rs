@@ -42,6 +42,9 @@ use std::time::Instant;
 #[derive(Clone, Debug, Serialize)]
 pub struct TimeReport {
     pub scene: String,
+    /// `scene.description`, to tell runs apart (review 23: documented as
+    /// shown in outputs, it was in none).
+    pub description: Option<String>,
     /// The scene's kind ("shell") and the method ("anm"), as every
     /// summary.json has them.
     pub kind: &'static str,
@@ -478,6 +481,7 @@ fn report(
         } => (*kind, *t, *node, Some(message.clone())),
     };
     let mut report = TimeReport {
+        description: scene.description.clone(),
         scene: scene.file.display().to_string(),
         kind: "shell",
         method: "anm",
@@ -560,7 +564,7 @@ fn report(
         && amplitude > along_strip::ALTERNATION
     {
         report.notes.push(format!(
-            "the contact pressure alternates from row to row inside a contact zone at t = {} (s = {:.4} to {:.4}, away from its edges): {lo:.4e} to {hi:.4e} around a mean of {mean:.4e}, up to ±{:.0} % of it (along.csv, friction.csv, friction.vtu); per-node pressures there are not resolved, while totals, tensions and two-row means are: read the pressure as two-row means (docs/shell-friction.md, a strip moved along its path)",
+            "the contact pressure alternates from row to row inside a contact zone at t = {} (s = {:.4} to {:.4}, away from its edges): {lo:.4e} to {hi:.4e} around a mean of {mean:.4e}, up to ±{:.0} % of it (along.csv, friction.csv, friction.vtu); per-node pressures there are not resolved, while totals, tensions and two-row means are: read the pressure as two-row means; the directors there zigzag about the obstacle's normal (friction.vtu `director`), a mode that node contact does not hold (docs/shell-friction.md, a strip carried along its path)",
             last.t,
             s[0],
             s[1],
@@ -719,6 +723,7 @@ fn write_fields(path: &Path, scene: &ShellScene, dae: &FrictionDae, s: &TimeSamp
     };
     let displacement: Vec<_> = (0..n).map(v3).collect();
     let x: Vec<_> = (0..n).map(|i| dae.model.x0[i] + displacement[i]).collect();
+    let director = dae.model.directors(&s.full);
     let mut rn = vec![0.0; n];
     let mut force = vec![nalgebra::Vector3::zeros(); n];
     let mut slip = vec![nalgebra::Vector3::zeros(); n];
@@ -740,6 +745,7 @@ fn write_fields(path: &Path, scene: &ShellScene, dae: &FrictionDae, s: &TimeSamp
         &dae.model,
         &s.full,
         scene.thickness,
+        false,
     ));
     write_vtu_cells(
         path,
@@ -747,6 +753,7 @@ fn write_fields(path: &Path, scene: &ShellScene, dae: &FrictionDae, s: &TimeSamp
         &scene.mesh.quads,
         &[
             PointData::Vector("displacement", displacement),
+            PointData::Vector("director", director),
             PointData::Scalar("contact_reaction", rn),
             PointData::Scalar("contact_pressure", pressure),
             PointData::Vector("friction_force", force),

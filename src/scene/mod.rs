@@ -38,9 +38,9 @@ impl Kind {
 
 /// Reads a scene file's text.
 pub fn read(path: &Path) -> Result<String> {
-    std::fs::read_to_string(path).map_err(|source| Error::Io {
+    std::fs::read_to_string(path).map_err(|source| Error::Parse {
         file: path.to_path_buf(),
-        source,
+        message: format!("cannot read: {source}"),
     })
 }
 
@@ -107,6 +107,20 @@ fn parse_error(path: &Path, text: &str, e: toml::de::Error) -> Error {
     }
     let line_no = text[..span.start.min(text.len())].matches('\n').count() + 1;
     let key = key_at(text, span.start);
+    // The parser reads a value starting with n or i as a try at nan or inf
+    // (review 22: `np.float64(0.5)` gave "invalid float, expected `nan`").
+    let message = if message.contains("expected `nan`") || message.contains("expected `inf`") {
+        let token: String = text[span.start.min(text.len())..]
+            .chars()
+            .take_while(|c| !matches!(c, ',' | ']' | '}' | '\n' | '#'))
+            .collect();
+        format!(
+            "`{}` is not a number (numbers are written 0.5, 1e-3, -2.0)",
+            token.trim()
+        )
+    } else {
+        message
+    };
     Error::Parse {
         file: path.to_path_buf(),
         message: match key {

@@ -885,6 +885,10 @@ pub fn load(path: &Path) -> Result<ShellScene> {
                 raw.solver.branch_direction.is_some(),
             ),
             ("output.snapshots", raw.output.snapshots.is_some()),
+            // fields.h5 holds the snapshots of the lambda grid; a run in
+            // time writes friction.vtu instead (before, it was ignored
+            // without a word).
+            ("output.hdf5", raw.output.hdf5 == Some(true)),
         ];
         if let Some((key, _)) = unused.iter().find(|(_, present)| *present) {
             return Err(c.fail(

@@ -12,6 +12,59 @@ use anm::run::shell_time;
 use anm::scene::shell::load;
 use anm::shell::time_path::Stepping;
 
+/// The numbers of a VTU DataArray named `name` (the first unnamed one for
+/// the points).
+fn vtu_array(text: &str, name: Option<&str>) -> Vec<f64> {
+    let start = match name {
+        Some(n) => text.find(&format!("Name=\"{n}\"")),
+        None => text.find("<Points>"),
+    }
+    .unwrap_or_else(|| panic!("{name:?} in the VTU"));
+    let body = &text[start..];
+    let body = &body[body.find('>').unwrap() + 1..];
+    let body = if name.is_none() {
+        &body[body.find('>').unwrap() + 1..]
+    } else {
+        body
+    };
+    body[..body.find("</DataArray>").unwrap()]
+        .split_whitespace()
+        .map(|x| x.parse().unwrap())
+        .collect()
+}
+
+/// friction.vtu's `director` on the nodes pressed onto the roller (axis x
+/// through the origin): a unit vector along the roller's outward normal,
+/// as a thin strip lying on a cylinder has (its transverse shear is
+/// ~T/(G t b) = 1e-5 here).
+fn directors_on_the_roller_are_its_normals(path: &std::path::Path) {
+    let text = std::fs::read_to_string(path).expect("friction.vtu");
+    let (x, d, rn) = (
+        vtu_array(&text, None),
+        vtu_array(&text, Some("director")),
+        vtu_array(&text, Some("contact_reaction")),
+    );
+    let (mut pressed, mut largest) = (0, 0.0_f64);
+    for (i, r) in rn.iter().enumerate() {
+        if *r <= 0.0 {
+            continue;
+        }
+        pressed += 1;
+        let radial = nalgebra::Vector3::new(0.0, x[3 * i + 1], x[3 * i + 2]).normalize();
+        let a3 = nalgebra::Vector3::new(d[3 * i], d[3 * i + 1], d[3 * i + 2]);
+        let tilt = (a3 - radial * a3.dot(&radial)).norm();
+        assert!(
+            (a3.norm() - 1.0).abs() < 1e-6,
+            "node {i}: |a3| = {}",
+            a3.norm()
+        );
+        assert!(tilt < 1e-4, "node {i}: director {tilt:.2e} off the normal");
+        largest = largest.max(tilt);
+    }
+    println!("{pressed} pressed nodes: directors within {largest:.2e} of the roller's normal");
+    assert!(pressed >= 10, "{pressed} pressed nodes");
+}
+
 /// scenes/strip-capstan.toml with a 90° wrap on 8 elements.
 fn coarse_capstan_text() -> String {
     std::fs::read_to_string("scenes/strip-capstan.toml")
@@ -231,6 +284,7 @@ fn anm_reference_ida_checks_a_shell_run_in_time_from_the_command_line() {
     let s = scene.display().to_string();
     let o = anm(&["run", &s, "--quiet", "-o", &anm_dir.display().to_string()]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    directors_on_the_roller_are_its_normals(&anm_dir.join("friction.vtu"));
     let o = anm(&[
         "reference",
         "ida",

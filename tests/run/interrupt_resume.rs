@@ -68,15 +68,36 @@ fn sigterm_stops_at_a_step_end_and_resume_matches_an_uninterrupted_run() {
         );
         std::thread::sleep(Duration::from_millis(2));
     }
+    // Review 23: a second run into the same folder removed the first's
+    // files and wrote its own beside them; it is refused while the first
+    // runs, and the first goes on.
+    let second = Command::new(env!("CARGO_BIN_EXE_anm"))
+        .args(["run", "--quiet"])
+        .arg(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/verification/euler-column.toml"))
+        .arg("-o")
+        .arg(&cut)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&second.stderr);
+    println!("{err}");
+    assert_eq!(second.status.code(), Some(1), "{err}");
+    assert!(err.contains("another run"), "{err}");
+    assert!(child.try_wait().unwrap().is_none(), "the first run goes on");
     Command::new("kill")
         .args(["-TERM", &child.id().to_string()])
         .status()
         .unwrap();
     let code = child.wait().unwrap().code();
     assert_eq!(code, Some(130), "exit code of an interrupted run");
+    assert!(!cut.join("anm.lock").exists(), "the lock goes with the run");
     let s = summary(&cut);
     println!("interrupted: {}", s["stop"]);
     assert_eq!(s["stop"]["reason"], "interrupted");
+    // scene.description names the run (review 23: it was in no output).
+    assert_eq!(
+        s["description"],
+        "strip 2 m x 0.2 m x 0.8 mm, cylinder D = 1 m at (1, 0, 0.5001), axis y"
+    );
     let lambda = s["stop"]["lambda"].as_f64().unwrap();
     let steps = rows(&cut.join("steps.csv"));
     let history = rows(&cut.join("history.csv"));
@@ -96,6 +117,30 @@ fn sigterm_stops_at_a_step_end_and_resume_matches_an_uninterrupted_run() {
     );
     // The snapshots written so far are indexed for ParaView (review 7).
     assert!(crate::common::unique_pvd_entries(&cut) >= 1);
+
+    // Review 23: a history.csv whose last row was cut mid-line passed the
+    // row count, and the resumed run panicked at its end. A copy of the
+    // folder with that row cut is refused before anything is solved.
+    let damaged = tmp("damaged");
+    std::fs::create_dir_all(&damaged).unwrap();
+    for entry in std::fs::read_dir(&cut).unwrap() {
+        let path = entry.unwrap().path();
+        std::fs::copy(&path, damaged.join(path.file_name().unwrap())).unwrap();
+    }
+    let text = std::fs::read_to_string(damaged.join("history.csv")).unwrap();
+    std::fs::write(damaged.join("history.csv"), &text[..text.len() - 20]).unwrap();
+    let o = Command::new(env!("CARGO_BIN_EXE_anm"))
+        .args(["run", "--quiet", "--resume"])
+        .arg(&damaged)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    println!("{err}");
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("not a whole row") && !err.contains("panicked"),
+        "{err}"
+    );
 
     let st = Command::new(env!("CARGO_BIN_EXE_anm"))
         .args(["run", "--quiet", "--resume"])
@@ -175,6 +220,13 @@ fn sigterm_stops_a_shell_run_in_time_with_its_outputs() {
     assert_eq!(code, Some(130), "exit code of an interrupted run");
     let s = summary(&out);
     assert_eq!(s["stop"]["reason"], "interrupted");
+    assert!(
+        s["description"]
+            .as_str()
+            .is_some_and(|d| d.starts_with("steel strip over three rollers")),
+        "{}",
+        s["description"]
+    );
     let t = s["stop"]["t"].as_f64().unwrap();
     assert!(t > 0.0 && t < 1.5, "stop.t = {t}");
     let history = rows(&out.join("history.csv"));

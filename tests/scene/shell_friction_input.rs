@@ -136,6 +136,16 @@ fn bad_friction_values_name_the_key() {
         );
         expect_invalid(&p, key, "not to a scene in time");
     }
+    // fields.h5 holds snapshots of the lambda grid: a run in time wrote
+    // none and said nothing.
+    expect_invalid(
+        &scene(
+            "hdf5-in-time.toml",
+            &[("[output]\n", "[output]\nhdf5 = true\n")],
+        ),
+        "output.hdf5",
+        "not to a scene in time",
+    );
     expect_invalid(
         &scene(
             "late-output.toml",
