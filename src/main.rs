@@ -1292,10 +1292,18 @@ fn time_summary(r: &anm::run::shell_time::TimeReport, out: &std::path::Path) -> 
         println!("  note: {n}");
     }
     for e in &r.events {
+        // A dip without a count change is a point crossed or closely
+        // passed: its depth says how closely (review 25).
+        let (what, how) = match e.dip {
+            Some(d) => (
+                "critical or near-critical point",
+                format!("kappa dip to {d:.3} of its largest, no negative pivot at the outputs"),
+            ),
+            None => ("critical point", e.detected_by.to_string()),
+        };
         println!(
-            "  critical point ({} tangent, {}): t = {:.6e} s, lambda = {:.6e} (between outputs {:.6e} and {:.6e} s{}; negative pivots {} -> {}), {}",
+            "  {what} ({} tangent, {how}): t = {:.6e} s, lambda = {:.6e} (between outputs {:.6e} and {:.6e} s{}; negative pivots {} -> {}), {}",
             e.tangent,
-            e.detected_by,
             e.t,
             e.lambda,
             e.outputs[0],

@@ -213,6 +213,12 @@ pub struct Recorder<'s> {
     pub dir: Option<PathBuf>,
     pub columns: Vec<String>,
     pub state: RecorderState,
+    /// The full state of the last history row (lambda, vector): the
+    /// corrected grid point, which the final files take where the path
+    /// ends on it (review 24: written from the step end instead, they
+    /// held 3e-5 of the load less contact force than history.csv's last
+    /// row, with a moving obstacle).
+    pub last_full: Option<(f64, Vec<f64>)>,
     history: Option<csv::Writer<File>>,
     steps: Option<csv::Writer<File>>,
 }
@@ -334,6 +340,7 @@ impl<'s> Recorder<'s> {
             dir: dir.map(Path::to_path_buf),
             columns,
             state,
+            last_full: None,
             history,
             steps,
         })
@@ -397,6 +404,7 @@ impl<'s> Recorder<'s> {
         }
         self.state.history.push(row);
         self.state.history_rows += 1;
+        self.last_full = Some((s.lambda, s.full.to_vec()));
         if self
             .scene
             .output

@@ -906,7 +906,12 @@ fn run_inner(
         b.finish();
     }
     let (u_last, lambda_last) = last;
-    let full_last = model.expand(&u_last, lambda_last);
+    // A path that ends on its last grid value ends in the state recorded
+    // there, corrected to solver.residual_tol in the force norm (review 24).
+    let full_last = match (&stop, rec.last_full.take()) {
+        (PathStop::End { .. }, Some((l, full))) if (l - lambda_last).abs() <= 1e-12 => full,
+        _ => model.expand(&u_last, lambda_last),
+    };
     // The final point when it is off the grid (a stop between grid values).
     // (A run that reaches lambda_end ends on it exactly: the engine
     // corrects its last step at that load.)

@@ -313,6 +313,7 @@ fn write_events(
         "negative_pivots_after",
         "kappa_before",
         "kappa_after",
+        "dip",
         "wavelength",
         "half_waves",
         "direction",
@@ -342,6 +343,7 @@ fn write_events(
             e.negative_pivots[1].to_string(),
             format!("{:.9e}", e.kappa[0]),
             format!("{:.9e}", e.kappa[1]),
+            opt(e.dip),
             opt(e.wavelength),
             opt(e.half_waves),
             e.wave_direction.clone().unwrap_or_default(),
@@ -450,6 +452,16 @@ fn report(
             e.vector = l.mode;
         }
     }
+    if monitored {
+        events.extend(stability::kink_events(
+            &mut dae,
+            &cfg,
+            &run.samples,
+            &stable,
+            scene.solver.linear,
+        )?);
+        events.sort_by(|a, b| a.t.total_cmp(&b.t));
+    }
     for e in &mut events {
         let full = dae.model.expand(&e.vector, 0.0);
         if let Some(w) = mode::wavelength(&dae.model.x0, &dae.model.a30, &dae.model.quads(), &full)
@@ -525,6 +537,20 @@ fn report(
         events,
         notes: vec![],
     };
+    // Review 25: holding uy for a planar motion left "0 friction nodes"
+    // and no tied stability check, without a word.
+    let partly_held = run
+        .skipped
+        .iter()
+        .filter(|&&n| (0..3).any(|c| dae.model.free[crate::fe::dof::index(n, c)].is_some()))
+        .count();
+    if partly_held > 0 {
+        report.notes.push(format!(
+            "{partly_held} contact nodes have one or two of their translations held and carry no friction at all (summary.json nodes_without_friction: {} nodes without friction, {} with): friction acts only at contact nodes whose three translations are free, and the tied tangent of the stability monitor holds none of these; hold such nodes through another group, or leave them out of contact.group",
+            run.skipped.len(),
+            report.friction_nodes
+        ));
+    }
     if let Some(p) =
         super::penetration::inside(&dae.model, &dae.model.obstacles_at(0.0), &last.full, last.t)
     {
@@ -577,24 +603,27 @@ fn report(
         // then moved with the tension and with omega (10 % off the
         // Coulomb answer at omega = 1e-3), and friction.csv only said
         // `stick`.
+        // The law's capacity f |R_N|_reg (eq. 5): an unpressed node holds
+        // f zeta (review 25: f R_N = 0 made a share of 6.2e306).
+        let capacity = |rn: f64| law.f * rn.hypot(law.zeta.unwrap_or(0.0));
         let held: Vec<&NodeFriction> = last
             .friction
             .iter()
             .filter(|f| friction_state(&law, f.slip.norm()).0 == "stick")
-            .filter(|f| f.force.norm() > 0.01 * law.f * f.rn.abs())
+            .filter(|f| f.force.norm() > 0.01 * capacity(f.rn))
             .collect();
         if let Some(most) = held
             .iter()
             .max_by(|a, b| a.force.norm().total_cmp(&b.force.norm()))
         {
             report.notes.push(format!(
-                "{} of {} friction nodes stick at t = {} while carrying friction (up to {:.3e} at node {}, {:.2} of f R_N there): a sticking contact keeps the friction the load history put on it and sheds it only by the regularized creep, so these forces, and the tensions they hold, depend on friction.load_ramp and on friction.omega (docs/shell-friction.md); where this friction is not meant to hold them (an idler roller that should pass the tension unchanged), the roller's surface speed must differ from the strip's, or omega and t_end must let the creep finish",
+                "{} of {} friction nodes stick at t = {} while carrying friction (up to {:.3e} at node {}, {:.2} of the law's capacity f |R_N|_reg there): a sticking contact keeps the friction the load history put on it and sheds it only by the regularized creep, so these forces, and the tensions they hold, depend on friction.load_ramp and on friction.omega (docs/shell-friction.md); where this friction is not meant to hold them (an idler roller that should pass the tension unchanged), the roller's surface speed must differ from the strip's, or omega and t_end must let the creep finish",
                 held.len(),
                 last.friction.len(),
                 last.t,
                 most.force.norm(),
                 dae.model.node_tag(most.node),
-                most.force.norm() / (law.f * most.rn.abs()).max(f64::MIN_POSITIVE)
+                most.force.norm() / capacity(most.rn).max(f64::MIN_POSITIVE)
             ));
         }
         let speeds: Vec<f64> = last

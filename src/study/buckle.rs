@@ -222,6 +222,16 @@ pub fn buckle(
                     ),
                 });
             }
+            // Review 25: a load with its own ramp is not in the load
+            // pattern (the loads friction.load_ramp scales): subspace
+            // iteration then found no mode and blamed tension.
+            if let Some((k, _)) = scene.friction.as_ref().and_then(|f| f.load_ramps.first()) {
+                return Err(Error::Invalid {
+                    file: scene.file.clone(),
+                    key: format!("load[{k}].ramp"),
+                    problem: "`anm buckle --time` takes the loads that friction.load_ramp scales as its load pattern, and this load has its own ramp: give it friction.load_ramp's (remove load.ramp) to buckle the state along it; the run's own stability monitor (friction.stability) covers every load".into(),
+                });
+            }
             time_base_state(scene, t)?
         }
         (Base::Lambda(_), true) => {
@@ -275,6 +285,25 @@ pub fn buckle(
                 }
             ),
         });
+    }
+    // Review 25: with ties, the static tangent may already have lost its
+    // stability (the regularized law's onset, which the run's monitor
+    // reports) while the tied one has not: a column pushed on a wall was
+    // critical at 1.0 P_c in the run and buckled at 8.25 P_c here, with
+    // no word.
+    let mut static_warning = None;
+    if !ties.is_empty() {
+        let (ks, _) = stability::tied_tangent(&mut model, &u0, lambda_base, &[])?;
+        let mut lu_static = LinearSolver::new(cfg.linear);
+        if let Ok(fs) = lu_static.factorize(&ks)
+            && let Some((neg, _, _)) = fs.inertia()
+            && neg > 0
+        {
+            static_warning = Some(format!(
+                "the static tangent of this base state (no sticking node tied) has {neg} negative pivot(s): under the regularized friction law the state is already past a critical point, which the run's friction.stability monitor locates; lambda_critical here is the onset under Coulomb friction (the {} sticking nodes tied)",
+                ties.len()
+            ));
+        }
     }
     let ut: Vec<f64> = f0.solve(&r_lambda.iter().map(|x| -x).collect::<Vec<_>>());
     // (B2) by central differences along the prebuckling tangent.
@@ -356,6 +385,7 @@ pub fn buckle(
     report
         .warnings
         .extend(reversed_loads(&report.modes, report.lambda_base));
+    report.warnings.extend(static_warning);
     if let Some(d) = out_dir {
         crate::output::write_json(&d.join("buckle.json"), &report)?;
         let rows: Vec<Vec<f64>> = report

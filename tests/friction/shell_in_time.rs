@@ -556,3 +556,25 @@ fn series_steps_between_implicit_ones_keep_the_error_estimate_sound() {
         assert!(rel <= 1e-6, "eps {eps}: {reaction} vs {expected}");
     }
 }
+
+/// Review 25: a column held in its plane (uy on every node) pressed on a
+/// wall with friction ran with "0 friction nodes" and no word: a contact
+/// node with one held translation carries no friction at all. The run now
+/// says so, with the count.
+#[test]
+fn contact_nodes_with_a_held_translation_are_named_as_without_friction() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data/column-held-in-plane-on-a-wall.toml");
+    let sc = anm::scene::shell::load(&path).expect("scene");
+    let r = shell_time::run(&sc, None).expect("run");
+    println!("{:?}", r.notes);
+    assert_eq!(r.friction_nodes, 0);
+    assert_eq!(r.nodes_without_friction.len(), 2);
+    assert!(
+        r.notes
+            .iter()
+            .any(|n| n.starts_with("2 contact nodes have one or two of their translations held")),
+        "{:?}",
+        r.notes
+    );
+}

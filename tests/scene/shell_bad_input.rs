@@ -868,12 +868,13 @@ fn a_model_far_from_the_origin_is_warned_about() {
     let text = |x0: f64| small_cantilever(x0, "s1");
     let near = ScratchFile::with_text("far-origin", "near.toml", &text(10.0));
     assert!(load(&near).unwrap().warnings.is_empty());
-    let far = ScratchFile::with_text("far-origin", "far.toml", &text(1000.0));
-    let w = load(&far).unwrap().warnings.join("\n");
-    assert!(
-        w.contains("far.toml") && w.contains("from the origin"),
-        "{w}"
-    );
+    // Review 24: copies of shipped scenes failed from 38 model sizes on,
+    // where the first threshold (100) said nothing; 31 sizes is warned of.
+    for (name, x0) in [("far.toml", 1000.0), ("farther-than-20.toml", 30.0)] {
+        let far = ScratchFile::with_text("far-origin", name, &text(x0));
+        let w = load(&far).unwrap().warnings.join("\n");
+        assert!(w.contains(name) && w.contains("from the origin"), "{w}");
+    }
 }
 
 /// The ANM's correction keys with the Newton baseline (review 16: accepted
