@@ -1179,6 +1179,14 @@ fn bench_scaling(
             "--scaling: `{s}`: NX must be a multiple of 20 and NY even (the plate-cylinder probes' node rows at x = 1.0, 1.1, 1.2 and the loads' nodes at y = 0, ±0.1: meshes/README.md)"
         );
     }
+    // Review 26: a size given twice gave NaN fitted exponents, and as two
+    // items wrote into one run folder.
+    if let Some(k) = (1..parsed.len()).find(|&k| parsed[..k].contains(&parsed[k])) {
+        anyhow::bail!(
+            "--scaling: `{}` is given twice: each size is one run (its folder run-NXxNY)",
+            sizes[k]
+        );
+    }
     if steps == 0 {
         anyhow::bail!("--scaling-steps must be >= 1");
     }

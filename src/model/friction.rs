@@ -24,6 +24,13 @@ pub trait FrictionModel: DaeProblem {
     fn row(&self, t: f64, y: &[f64], ydot: &[f64]) -> Vec<f64>;
     /// Slip velocity v_s from y (for diagnostics and plots).
     fn slip(&self, y: &[f64]) -> f64;
+    /// dG/dR_N = 2 R_N / K + h of eq. (3) at y, positive on the law's
+    /// physical root (None without a contact law). Review 26: at eta =
+    /// 1e-16 N friction-plane ended on the other root, the mass 2 m
+    /// through the plane with R_N = 8.8e-15 N, exit 0.
+    fn contact_branch(&self, _y: &[f64]) -> Option<f64> {
+        None
+    }
 }
 
 /// §3.2, eq. (7): spring k on a plane moving at V, known normal force R_N.
@@ -140,6 +147,10 @@ impl FrictionModel for FrictionPlane {
     fn slip(&self, y: &[f64]) -> f64 {
         y[1] - self.v_plane
     }
+    fn contact_branch(&self, y: &[f64]) -> Option<f64> {
+        // y = (ux, vx, uy, rn, rt), h = uy + delta.
+        Some(2.0 * y[3] / self.contact.k + y[2] + self.contact.delta)
+    }
 }
 
 /// §3.4: the obstacle is a cylinder of radius r, centre C = (0, -(delta + r)),
@@ -241,6 +252,10 @@ impl FrictionModel for FrictionRoller {
     }
     fn slip(&self, y: &[f64]) -> f64 {
         y[2] * y[1] + self.spin * self.radius
+    }
+    fn contact_branch(&self, y: &[f64]) -> Option<f64> {
+        // y = (phi, omega, rho, rn, rt), h = rho - radius.
+        Some(2.0 * y[3] / self.contact.k + y[2] - self.radius)
     }
 }
 

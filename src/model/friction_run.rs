@@ -261,6 +261,23 @@ pub fn run(scene: &FrictionScene, out_dir: Option<&Path>, progress: bool) -> Res
                 stats.steps, step.length
             ));
         }
+        // The other root of eq. (3): the mass through the obstacle (IDA
+        // stops there too, `off_branch`).
+        if let Some(g) = model.contact_branch(&y)
+            && !(g > 0.0)
+        {
+            return Err(crate::Error::OffPath {
+                step: step.index + 1,
+                param: "t",
+                at: t1,
+                what: format!(
+                    "the solution left the contact law's physical root: 2 R_N / K + h = {g:.3e} <= 0 with R_N = {:.3e} N, the mass through the obstacle (a root of eq. 3 that is not the contact); contact.eta = {:e} is below what the arithmetic resolves against K delta^2 = {:.3e}: raise contact.eta",
+                    y[3],
+                    scene.contact.map_or(f64::NAN, |c| c.eta),
+                    scene.contact.map_or(f64::NAN, |c| c.k * c.delta * c.delta),
+                ),
+            });
+        }
         series.push(step);
         // Ctrl-C or SIGTERM: stop at this step end (no resume for the DAE).
         if crate::run::interrupt::requested() {

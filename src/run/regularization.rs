@@ -84,6 +84,17 @@ pub fn sink_note(
     let of_size = depth > SINK * model.length_scale;
     let of_motion = depth > SINK_SHARE * moved && depth > 1e-6 * model.length_scale;
     (of_size || of_motion).then(|| {
+        // Review 27: two rolls of a nip moved onto a strip that cannot
+        // give way held 300 N at K = 1e8 and 30,000 N at 1e10, and the
+        // share of the displacement read as a 306-digit number (0 moved).
+        if depth >= moved {
+            return format!(
+                "contact node {} ends {depth:.3e} inside `{}` at lambda = {lambda}, more than the shell's largest displacement ({moved:.3e}): the obstacles' placement or motion overlaps a shell that cannot give way (a nip closing on a strip held between two obstacles), and the contact force there, about K × depth, is set by contact.k = {:e}, not by the structure; leave the shell a way to move, or drive it by a load",
+                model.node_tag(pair.node),
+                specs[pair.obstacle].name,
+                pair.law.k
+            );
+        }
         format!(
             "contact node {} ends {depth:.3e} inside `{}` at lambda = {lambda} ({:.1}% of the model's size, {:.0}% of its largest displacement): contact.k = {:e} is too soft for the forces it carries (the penalty sinks a node by about R / K)",
             model.node_tag(pair.node),

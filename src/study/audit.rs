@@ -305,14 +305,22 @@ pub fn rows(scene: &FrictionScene, items: &[AuditItem]) -> Result<Vec<AuditRow>>
                 a.0.total_cmp(&b.0)
             }
         };
-        let (least_value, smallest) = *group.iter().min_by(least).expect("non-empty");
+        // Review 26: a run that stopped short (non-finite values at t = 0,
+        // its step budget) was the reference, and every finished run was
+        // 1e308 or 1.75e-2 off it. The reference is the least regularized
+        // run that reached its answer (t_end, or the roller's breakdown);
+        // a run that stopped short gets NaN deviations.
+        let completed = |r: &RunRecord| matches!(r.stop.as_str(), "end" | "singularity");
+        let finished: Vec<&(f64, &RunRecord)> =
+            group.iter().filter(|(_, r)| completed(r)).collect();
+        let least_finished = finished.iter().copied().min_by(least);
         // Unregularized reference: closed forms where the problem has them.
         let exact_curve = (scene.kind == Kind::Friction1d && name == "omega")
             .then(|| friction_1d_unregularized(scene))
             .flatten();
         let (ref_name, ref_key, ref_traj): (String, f64, Vec<(f64, Vec<f64>)>) =
-            match (&exact_curve, scene.obstacle) {
-                (Some(curve), Obstacle::Plane { v }) => (
+            match (&exact_curve, scene.obstacle, least_finished) {
+                (Some(curve), Obstacle::Plane { v }, _) => (
                     "closed form (omega = 0)".into(),
                     scene.friction.f
                         * scene.normal_force
@@ -320,14 +328,23 @@ pub fn rows(scene: &FrictionScene, items: &[AuditItem]) -> Result<Vec<AuditRow>>
                         / scene.k,
                     curve.clone(),
                 ),
-                _ => (
+                (_, _, Some((least_value, smallest))) => (
                     format!("run with {name} = {least_value:e}"),
                     key_output(smallest).1,
                     smallest.history.iter().map(|r| (r[0], r.clone())).collect(),
                 ),
+                (_, _, None) => ("none (no run reached its answer)".into(), f64::NAN, vec![]),
             };
         for (v, r) in group {
             let (key_name, key) = key_output(r);
+            let (key_deviation, trajectory) = if completed(r) && !ref_key.is_nan() {
+                (
+                    super::time_audit::deviation(key, ref_key),
+                    trajectory_deviation(r, &ref_traj),
+                )
+            } else {
+                (f64::NAN, f64::NAN)
+            };
             rows.push(AuditRow {
                 parameter: name,
                 value: v,
@@ -335,9 +352,9 @@ pub fn rows(scene: &FrictionScene, items: &[AuditItem]) -> Result<Vec<AuditRow>>
                 t_stop: r.t_stop.unwrap_or(f64::NAN),
                 key_name,
                 key,
-                key_deviation: (key - ref_key).abs() / ref_key.abs().max(f64::MIN_POSITIVE),
+                key_deviation,
                 reference: ref_name.clone(),
-                trajectory_deviation: trajectory_deviation(r, &ref_traj),
+                trajectory_deviation: trajectory,
                 steps: r.steps,
                 factorizations: r.factorizations,
                 wall_s: r.wall_s,

@@ -524,8 +524,10 @@ impl Sweep for TimeAudit {
 }
 
 /// |a − b| / |b|; |a − b| where the reference b is 0 (review 13: an idler's
-/// slip area, 0 in every run, gave 0/0 = NaN in audit.md and audit.csv).
-fn deviation(a: f64, b: f64) -> f64 {
+/// slip area, 0 in every run, gave 0/0 = NaN in audit.md and audit.csv;
+/// review 26: the point-mass audit's division by a zero reference gave
+/// 1.04e308).
+pub(crate) fn deviation(a: f64, b: f64) -> f64 {
     if b == 0.0 {
         (a - b).abs()
     } else {

@@ -98,3 +98,24 @@ fn a_shell_not_held_before_contact_is_noted() {
         r.notes
     );
 }
+
+/// Review 27: a symmetric nip whose rolls close on a strip that cannot
+/// give way holds K × depth (300 N at K = 1e8 N/m, 30,000 N at 1e10): the
+/// note blamed a soft K and gave the depth's share of a zero displacement
+/// as a 306-digit percentage. It now says the placement overlaps a shell
+/// that cannot move and that K sets the force.
+#[test]
+fn a_nip_closed_on_a_shell_that_cannot_move_is_named() {
+    let path =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/symmetric-nip.toml");
+    let sc = load(&path).expect("scene");
+    let r = run_loaded(&sc, None, false).expect("run");
+    println!("{:?}", r.notes);
+    let note = r
+        .notes
+        .iter()
+        .find(|n| n.contains("cannot give way"))
+        .expect("the overlap note");
+    assert!(note.contains("contact.k = 1e8"), "{note}");
+    assert!(note.len() < 600, "{note}");
+}

@@ -66,3 +66,67 @@ fn paper_parameters_slope_is_slightly_below_coulomb() {
     println!("slope of u_x on [2, 3]: {slope:.6} (Coulomb: 0.2)");
     assert!(slope < 0.2 && slope > 0.19, "slope {slope}");
 }
+
+/// Review 26: the point-mass audit took a run that stopped short as its
+/// reference (friction-plane with a budget of 100 steps: ζ = 1e-4 stops at
+/// t = 1.62 s of 3, and the finished ζ = 1e-2 run was "1.75e-2 off" it;
+/// a run that stopped at t = 0 gave 1.04e308). The reference is now the
+/// least regularized run that reached its answer, and a stopped run gets
+/// NaN deviations.
+#[test]
+fn the_audit_reference_is_a_run_that_reached_its_answer() {
+    use anm::study::audit::{Sweeps, audit};
+    let mut sc = crate::common::friction_scene("friction-plane.toml", &[]);
+    sc.max_steps = 100;
+    let sweeps = Sweeps {
+        omega: vec![],
+        zeta: vec![1e-4, 1e-2],
+        eta: vec![],
+        penalty: vec![],
+    };
+    let rows = audit(&sc, &sweeps).expect("audit");
+    for r in &rows {
+        println!(
+            "{} = {:e}: {} at {}, deviation {:e}, trajectory {:e}, {}",
+            r.parameter,
+            r.value,
+            r.stop,
+            r.t_stop,
+            r.key_deviation,
+            r.trajectory_deviation,
+            r.reference
+        );
+    }
+    let (budget, finished) = (&rows[0], &rows[1]);
+    assert_eq!(budget.stop, "max_steps");
+    assert_eq!(finished.stop, "end");
+    assert_eq!(finished.reference, "run with zeta = 1e-2");
+    assert_eq!(finished.key_deviation, 0.0);
+    assert!(budget.key_deviation.is_nan() && budget.trajectory_deviation.is_nan());
+}
+
+/// Review 26: at eta = 1e-16 N the run followed the other root of eq. (3)
+/// and ended with the mass 2 m through the plane (u_y = -3 m, R_N =
+/// 8.8e-15 N where F t - k delta = 2 N), `stop = end`, exit 0. It now
+/// stops where the branch test 2 R_N / K + h turns negative, at the
+/// contact (t = 1 s: F t = k delta), naming contact.eta.
+#[test]
+fn a_run_on_the_contact_laws_other_root_stops() {
+    let sc = friction_scene("friction-plane.toml", &[("contact.eta", "1e-16")]);
+    let r = run(&sc, None, false).expect("a run with a stop");
+    println!("{:?}", r.stop);
+    assert_eq!(r.stop.reason, "off_path");
+    let t = r.stop.t.expect("t");
+    assert!((1.0..1.01).contains(&t), "t = {t}");
+    assert!(
+        r.stop
+            .message
+            .as_deref()
+            .is_some_and(|m| m.contains("contact.eta")),
+        "{:?}",
+        r.stop.message
+    );
+    // Nothing past the stop: every row has the mass above the plane.
+    let uy = column(&r, "uy");
+    assert!(uy.iter().all(|&y| y > -1.0 - 1e-6), "{uy:?}");
+}

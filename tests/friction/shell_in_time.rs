@@ -578,3 +578,33 @@ fn contact_nodes_with_a_held_translation_are_named_as_without_friction() {
         r.notes
     );
 }
+
+/// Review 27: an idle nip roll added outside the capstan's wrap at 90°,
+/// 5e-9 m off the strip (1e-8 m from the main roller), took the two nodes
+/// under it as its pairs (each node pairs with its nearest obstacle): they
+/// sank 2.8e-6 m into the main roller unfelt, and the held tension moved
+/// from 37.312 to 37.452 N, with exit 0 and no note. The run now names
+/// the nodes inside an obstacle they do not feel.
+#[test]
+fn a_contact_node_inside_an_obstacle_it_is_not_paired_with_is_named() {
+    let text = std::fs::read_to_string("scenes/strip-capstan.toml")
+        .expect("scene")
+        .replace(
+            "# T0 = 20 N over the width",
+            "[[obstacle]]\nname = \"niproll\"\ntype = \"cylinder\"\ncentre = [0.0, 0.350000015, 0.0]\naxis = [1.0, 0.0, 0.0]\nradius = 0.05\n\n# T0 = 20 N over the width",
+        );
+    assert!(text.contains("niproll"));
+    let path = crate::scratch::ScratchFile::with_text("niproll", "capstan.toml", &text);
+    let sc = anm::scene::shell::load(&path).expect("scene");
+    let r = shell_time::run(&sc, None).expect("run");
+    println!("{:?}", r.notes);
+    let note = r
+        .notes
+        .iter()
+        .find(|n| n.contains("inside an obstacle they do not feel"))
+        .expect("a note");
+    assert!(
+        note.starts_with("2 nodes") && note.contains("paired with `niproll`"),
+        "{note}"
+    );
+}

@@ -357,6 +357,14 @@ fn scaling_items_merge_to_the_single_process_table() {
     let tmp = crate::scratch::scratch("sweeps-scaling");
     let dir = tmp.path();
     let d = |s: &str| dir.join(s).to_str().unwrap().to_string();
+    // Review 26: a size given twice is refused up front (it gave NaN
+    // exponents, and two items wrote into one folder).
+    let twice = anm(&["bench", "--scaling", "20x2,20x2", "-o", &d("twice")]);
+    let err = String::from_utf8_lossy(&twice.stderr);
+    assert!(
+        !twice.status.success() && err.contains("given twice"),
+        "{err}"
+    );
     let sweep = ["bench", "--scaling", "20x2,40x4", "--scaling-steps", "2"];
     let list = ok(
         "--list-items",
