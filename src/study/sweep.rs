@@ -329,6 +329,7 @@ fn prepare(dir: &Path, m: &Manifest, fresh: bool) -> Result<()> {
     create_dir(&items_dir(dir))?;
     let file = dir.join("sweep.json");
     if fresh {
+        let mut removed = 0;
         for e in std::fs::read_dir(items_dir(dir)).map_err(io(dir))? {
             let p = e.map_err(io(dir))?.path();
             let numbered = p.extension().is_some_and(|x| x == "json")
@@ -337,7 +338,15 @@ fn prepare(dir: &Path, m: &Manifest, fresh: bool) -> Result<()> {
                     .is_some_and(|s| !s.is_empty() && s.bytes().all(|b| b.is_ascii_digit()));
             if numbered {
                 std::fs::remove_file(&p).map_err(io(&p))?;
+                removed += 1;
             }
+        }
+        // Review 26: 11 items of another sweep went without a word.
+        if removed > 0 {
+            eprintln!(
+                "note: removed {removed} item files of an earlier sweep from {}",
+                items_dir(dir).display()
+            );
         }
     } else if file.exists() {
         let there = read_manifest(dir)?;

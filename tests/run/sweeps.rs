@@ -483,3 +483,28 @@ fn a_merge_refuses_items_of_another_mesh_or_sweep() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success() && err.contains("7.json"), "{err}");
 }
+
+/// Review 26: a single-process sweep into a folder that holds another
+/// sweep's items removed them without a word; it now says how many.
+#[test]
+fn a_sweep_that_replaces_earlier_items_says_so() {
+    let tmp = crate::scratch::scratch("sweeps-replace");
+    let d = tmp.path().join("a").to_str().unwrap().to_string();
+    let sweep = [
+        "audit",
+        "scenes/friction-plane.toml",
+        "--zeta",
+        "1e-2,1e-1",
+        "-o",
+        &d,
+    ];
+    let first = anm(&sweep);
+    assert!(first.status.success(), "{first:?}");
+    let second = anm(&sweep);
+    let err = String::from_utf8_lossy(&second.stderr);
+    assert!(second.status.success(), "{err}");
+    assert!(
+        err.contains("removed 2 item files of an earlier sweep"),
+        "{err}"
+    );
+}
