@@ -27,12 +27,14 @@ pub struct Inside {
     pub paired: Option<usize>,
 }
 
-/// Nodes outside the contact candidates inside `obstacles` (where their
-/// motion has taken them) in the state `full` (full dof vector) at `at`.
-/// Depths below 1e-9 of the model's length scale are round-off.
+/// Nodes inside an obstacle they do not feel (where their motion has
+/// taken them) in the state `full` (full dof vector) at `at`: nodes
+/// outside the contact candidates, and candidates inside an obstacle they
+/// are not paired with. Depths below 1e-9 of the model's length scale are
+/// round-off.
 ///
 /// A contact candidate feels only the obstacles it is paired with (with
-/// friction, its nearest one): inside another, it is counted too (review
+/// friction, its nearest one): inside another, it is counted (review
 /// 27: an idle nip roll 5e-9 m off a wrapped strip took the two nodes
 /// under it, which sank 2.8e-6 m into the main roller unfelt, and the
 /// held tension moved by 0.37 %, with exit 0 and no note).

@@ -72,8 +72,41 @@ pub fn linear_membrane_stress(
     thickness: f64,
 ) -> MembraneStress {
     let minus: Vec<f64> = full.iter().map(|x| -x).collect();
-    let n = (model.membrane_resultant(e, full) - model.membrane_resultant(e, &minus)) * 0.5;
+    linear_from(model, e, full, &minus, thickness)
+}
+
+/// [`linear_membrane_stress`] with −full given (negated once for all
+/// elements).
+fn linear_from(
+    model: &ShellModel,
+    e: usize,
+    full: &[f64],
+    minus: &[f64],
+    thickness: f64,
+) -> MembraneStress {
+    let n = (model.membrane_resultant(e, full) - model.membrane_resultant(e, minus)) * 0.5;
     in_element_frame(model, e, n / thickness)
+}
+
+/// The membrane stresses of every element: of the Green–Lagrange strain,
+/// or of the linear strain (`linear`: the linear method's solution).
+pub fn membrane_stresses(
+    model: &ShellModel,
+    full: &[f64],
+    thickness: f64,
+    linear: bool,
+) -> Vec<MembraneStress> {
+    let elements = 0..model.elements.len();
+    if linear {
+        let minus: Vec<f64> = full.iter().map(|x| -x).collect();
+        elements
+            .map(|e| linear_from(model, e, full, &minus, thickness))
+            .collect()
+    } else {
+        elements
+            .map(|e| membrane_stress(model, e, full, thickness))
+            .collect()
+    }
 }
 
 /// A membrane stress tensor (global frame) along, across and principal.
@@ -112,14 +145,7 @@ pub fn stress_cells(
     linear: bool,
 ) -> Vec<crate::output::vtk::PointData<'static>> {
     use crate::output::vtk::PointData;
-    let stress_of = if linear {
-        linear_membrane_stress
-    } else {
-        membrane_stress
-    };
-    let stress: Vec<MembraneStress> = (0..model.elements.len())
-        .map(|e| stress_of(model, e, full, thickness))
-        .collect();
+    let stress = membrane_stresses(model, full, thickness, linear);
     let cell = |f: fn(&MembraneStress) -> f64| stress.iter().map(f).collect();
     vec![
         PointData::Scalar("stress_along", cell(|m| m.along)),

@@ -1047,18 +1047,13 @@ fn run_inner(
             }
             // Review 21: E = 2e3 in a scene in m gave 32 % strain, unnoted
             // (right for that input, but a unit slip most likely).
-            let stress_of = if matches!(scene.method, Method::Linear) {
-                super::section::linear_membrane_stress
-            } else {
-                super::section::membrane_stress
-            };
-            let strain = (0..model.elements.len())
-                .map(|e| {
-                    let m = stress_of(&model, e, &full_last, scene.thickness);
-                    m.min.abs().max(m.max.abs())
-                })
-                .fold(0.0, f64::max)
-                / scene.material.young;
+            let linear = matches!(scene.method, Method::Linear);
+            let strain =
+                super::section::membrane_stresses(&model, &full_last, scene.thickness, linear)
+                    .iter()
+                    .map(|m| m.min.abs().max(m.max.abs()))
+                    .fold(0.0, f64::max)
+                    / scene.material.young;
             if strain > LARGE_STRAIN {
                 notes.push(format!(
                     "membrane strains reach about {:.0} % (stress / young): the material law (St Venant–Kirchhoff) is meant for moderate strains; if these are not intended, check the units of material.young and of the loads",

@@ -2031,10 +2031,10 @@ fn moving_away(
     out
 }
 
-/// A thickness above this share of the model's size is no shell.
 /// Distance from the origin, in model sizes, above which a scene is
 /// warned of (round-off of strains from absolute positions).
 const FAR_FROM_ORIGIN: f64 = 20.0;
+/// A thickness above this share of the model's size is no shell.
 const THICK: f64 = 0.25;
 
 fn axis_of(s: &str) -> Option<usize> {

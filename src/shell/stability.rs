@@ -383,7 +383,8 @@ pub fn kink_events(
                 .pop()
                 .expect("one sample");
             for (tangent, tied) in [("static", false), ("tied", true)] {
-                let pick = |s: &SampleStability| if tied { s.tied.clone() } else { s.free.clone() };
+                let pick: fn(&SampleStability) -> &Inertia =
+                    if tied { |s| &s.tied } else { |s| &s.free };
                 let (ia, ik) = (pick(&stable[i]), pick(&at_kink));
                 let (Some(na), Some(nk)) = (ia.negative_pivots, ik.negative_pivots) else {
                     continue;
@@ -409,7 +410,7 @@ pub fn kink_events(
                     wave_direction: None,
                     vector: ik.mode.clone(),
                 };
-                if let Some(l) = locate(dae, cfg, (a, &ia), (&m, &ik), tied, linear)? {
+                if let Some(l) = locate(dae, cfg, (a, ia), (&m, ik), tied, linear)? {
                     e.t = l.t;
                     e.lambda = l.lambda;
                     e.bracket = l.bracket;
